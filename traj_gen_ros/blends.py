@@ -1,0 +1,355 @@
+"""
+Linear segments with parabolic blends (LSPB), single segment and through via points.
+
+Equation numbers are those of the lecture (Craig, *Introduction to Robotics*, 3rd ed.,
+§7.3, "linear function with parabolic blends"): the single segment's blend time eq. (5)
+and its feasibility condition eq. (6); for via points the interior formulas (1), the
+first segment (2)-(3) and the last segment (4)-(5).
+
+Every result is a piecewise parabola (blends) and line (linear parts) per joint.
+
+Craig's via-point method rounds the corners: the path does not pass through interior via
+points (it reaches them only in the limit of infinite acceleration), but keeps the total
+duration exactly. That is the book's method, not an error.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from traj_gen_ros import validation
+from traj_gen_ros.trajectory import Trajectory
+from traj_gen_ros.validation import ArrayLike
+
+_FEASIBILITY_TOLERANCE = 1e-12  # relative slack for rounding in the feasibility checks
+_BISECTION_STEPS = 80
+
+
+class BlendedTrajectory(Trajectory):
+    """
+    An LSPB trajectory with Craig's timing table.
+
+    :ivar blend_times: blend duration at every point (s), ``(points, joints)``.
+    :ivar linear_velocities: velocity of each linear part (rad/s), ``(segments, joints)``.
+    :ivar linear_durations: duration of each linear part (s), ``(segments, joints)``.
+
+    """
+
+    def __init__(
+        self,
+        breakpoints: np.ndarray,
+        coefficients: np.ndarray,
+        blend_times: np.ndarray,
+        linear_velocities: np.ndarray,
+        linear_durations: np.ndarray,
+    ) -> None:
+        super().__init__(breakpoints, coefficients)
+        self.blend_times = blend_times
+        self.linear_velocities = linear_velocities
+        self.linear_durations = linear_durations
+
+
+def lspb(
+    q0: ArrayLike,
+    qf: ArrayLike,
+    duration: float,
+    acceleration: ArrayLike,
+    v0: ArrayLike = 0.0,
+) -> BlendedTrajectory:
+    """
+    One linear segment with two parabolic blends, ``q0`` → ``qf`` (rad) in ``duration`` (s).
+
+    From rest, both blends last ``t_b`` of eq. (5),
+    ``t_b = t/2 - sqrt(θ̈² t² - 4 θ̈ |θf - θ0|) / (2 θ̈)``, which needs eq. (6),
+    ``θ̈ ≥ 4 |θf - θ0| / t²``: a lower ``acceleration`` (rad/s², magnitude, scalar or per
+    joint) raises ``ValueError`` naming the joint and that minimum.
+
+    ``v0`` (rad/s, an extension for replanning a moving joint) starts the first blend at
+    that velocity: the cruise velocity is then found numerically (the displacement grows
+    monotonically with it) and both blends use ``acceleration``.
+    """
+    rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0)
+    start, goal, start_velocity = rows
+    duration = validation.duration_of(duration)
+    acceleration = validation.positive_per_joint('acceleration', acceleration, rows.shape[1])
+    if np.any(start_velocity):
+        cruise = _moving_start_cruise(goal - start, duration, acceleration, start_velocity)
+    else:
+        cruise = _rest_start_cruise(goal - start, duration, acceleration)
+    points = np.stack([start, goal])
+    blend_times = np.stack([np.abs(cruise - start_velocity), np.abs(cruise)]) / acceleration
+    return _assemble(
+        points, np.array([duration]), blend_times, cruise[None], start_velocity, acceleration
+    )
+
+
+def lspb_via(
+    points: ArrayLike,
+    durations: ArrayLike,
+    acceleration: ArrayLike,
+    v0: ArrayLike = 0.0,
+) -> BlendedTrajectory:
+    """
+    Craig's linear segments with parabolic blends through via points.
+
+    :param points: positions (rad), ``(points,)`` or ``(points, joints)``.
+    :param durations: time between consecutive points (s), one per segment (``t_djk``).
+    :param acceleration: blend acceleration magnitude ``|θ̈|`` (rad/s²), scalar or per joint.
+    :param v0: start velocity (rad/s); an extension of the first-segment formula (2) for
+        replanning a moving joint. Zero gives Craig's formula exactly.
+
+    First segment (2)-(3): ``t1 = t_d12 - sqrt(t_d12² - 2|θ2 - θ1|/|θ̈|)``,
+    ``θ̇12 = (θ2 - θ1)/(t_d12 - t1/2)``; last segment (4)-(5) likewise; interior (1):
+    ``θ̇jk = (θk - θj)/t_djk``, ``tk = |θ̇kl - θ̇jk|/|θ̈|``, ``t_jk = t_djk - tj/2 - tk/2``
+    (a whole blend time at the first and last point). With two points the two end
+    formulas contradict each other, so the single-segment eq. (5) is used instead.
+
+    Raises ``ValueError`` naming the joint and point when a blend cannot fit (the first
+    or last square root is negative, or two blends overlap), with the smallest
+    acceleration that fits.
+
+    """
+    path = validation.path_points(points)
+    durations = validation.segment_durations(durations, len(path) - 1)
+    acceleration = validation.positive_per_joint('acceleration', acceleration, path.shape[1])
+    start_velocity = validation.per_joint_rows(v0=v0, like=path[0])[0]
+    if len(path) == 2:
+        return lspb(path[0], path[1], durations[0], acceleration, start_velocity)
+    timing = _via_timing(path, durations, acceleration, start_velocity)
+    problem = _first_problem(timing, durations)
+    if problem is not None:
+        joint, reason = problem
+        minimum = _smallest_fitting_acceleration(path, durations, acceleration, start_velocity)
+        raise ValueError(f'lspb_via: joint {joint}: {reason} with acceleration '
+                         f'{acceleration[joint]:g}; the smallest acceleration that fits is '
+                         f'{_round_up(minimum[joint])}')
+    blend_times, velocities, _, _ = timing
+    return _assemble(path, durations, blend_times, velocities, start_velocity, acceleration)
+
+
+def _rest_start_cruise(
+    displacement: np.ndarray, duration: float, acceleration: np.ndarray
+) -> np.ndarray:
+    """Cruise velocity ``θ̈ t_b`` of eq. (5), after checking eq. (6) joint by joint."""
+    distance = np.abs(displacement)
+    minimum = 4.0 * distance / duration**2
+    too_low = np.flatnonzero(acceleration < minimum * (1.0 - _FEASIBILITY_TOLERANCE))
+    if too_low.size:
+        joint = too_low[0]
+        raise ValueError(
+            f'lspb: joint {joint}: acceleration {acceleration[joint]:g} is too low to move '
+            f'{displacement[joint]:g} in {duration:g} s; eq. (6) needs at least '
+            f'{_round_up(minimum[joint])}')
+    root = np.sqrt(np.maximum(acceleration**2 * duration**2 - 4.0 * acceleration * distance, 0.0))
+    blend_time = duration / 2.0 - root / (2.0 * acceleration)
+    return np.sign(displacement) * acceleration * blend_time
+
+
+def _moving_start_cruise(
+    displacement: np.ndarray,
+    duration: float,
+    acceleration: np.ndarray,
+    start_velocity: np.ndarray,
+) -> np.ndarray:
+    """
+    Cruise velocity that moves ``displacement`` in ``duration`` from ``start_velocity``.
+
+    Blend from ``v0`` to the cruise velocity ``vc``, cruise, blend to rest, all at
+    ``acceleration``. The blends fit while ``vc`` lies in
+    ``[(v0 - θ̈t)/2, (v0 + θ̈t)/2]``, where the displacement is monotonic in ``vc``:
+    bisection finds it, for every joint at once.
+    """
+    span = acceleration * duration
+    low, high = (start_velocity - span) / 2.0, (start_velocity + span) / 2.0
+    reachable = np.abs(start_velocity) <= span * (1.0 + _FEASIBILITY_TOLERANCE)
+    reach_low = _moving_displacement(low, start_velocity, duration, acceleration)
+    reach_high = _moving_displacement(high, start_velocity, duration, acceleration)
+    slack = _FEASIBILITY_TOLERANCE * (np.abs(displacement) + 1.0)
+    fits = reachable & (reach_low - slack <= displacement) & (displacement <= reach_high + slack)
+    if not fits.all():
+        joint = int(np.flatnonzero(~fits)[0])
+        raise ValueError(
+            f'lspb: joint {joint}: cannot move {displacement[joint]:g} in {duration:g} s '
+            f'from velocity {start_velocity[joint]:g} with acceleration '
+            f'{acceleration[joint]:g}; give a higher acceleration or a longer duration')
+    for _ in range(_BISECTION_STEPS):
+        middle = 0.5 * (low + high)
+        short = _moving_displacement(middle, start_velocity, duration, acceleration) < displacement
+        low = np.where(short, middle, low)
+        high = np.where(short, high, middle)
+    return 0.5 * (low + high)
+
+
+def _moving_displacement(
+    cruise: np.ndarray, start_velocity: np.ndarray, duration: float, acceleration: np.ndarray
+) -> np.ndarray:
+    """Displacement of blend (v0 → vc), cruise at vc, blend (vc → 0) in ``duration``."""
+    first = np.abs(cruise - start_velocity) / acceleration
+    last = np.abs(cruise) / acceleration
+    linear = duration - first - last
+    return 0.5 * (start_velocity + cruise) * first + cruise * linear + 0.5 * cruise * last
+
+
+def _via_timing(
+    path: np.ndarray,
+    durations: np.ndarray,
+    acceleration: np.ndarray,
+    start_velocity: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """
+    Craig's blend times ``(points, joints)``, linear velocities and durations.
+
+    Returns also the two end discriminants ``(2, joints)``; a negative one means the first
+    or last blend cannot reach its segment's line. Nothing is checked here.
+    """
+    h = durations[:, None]
+    slopes = np.diff(path, axis=0) / h
+    # First segment, eq. (2)-(3), from velocity v0: the excess over coasting at v0.
+    excess = (path[1] - path[0]) - durations[0] * start_velocity
+    first_disc = durations[0] ** 2 - 2.0 * np.abs(excess) / acceleration
+    first_blend = durations[0] - np.sqrt(np.maximum(first_disc, 0.0))
+    first_velocity = start_velocity + np.sign(excess) * acceleration * first_blend
+    # Last segment, eq. (4)-(5).
+    last_step = path[-1] - path[-2]
+    last_disc = durations[-1] ** 2 - 2.0 * np.abs(last_step) / acceleration
+    last_blend = durations[-1] - np.sqrt(np.maximum(last_disc, 0.0))
+    last_velocity = last_step / (durations[-1] - 0.5 * last_blend)
+    velocities = slopes.copy()
+    velocities[0] = first_velocity
+    velocities[-1] = last_velocity
+    # Interior blends, eq. (1).
+    blend_times = np.empty_like(path)
+    blend_times[0] = first_blend
+    blend_times[-1] = last_blend
+    blend_times[1:-1] = np.abs(np.diff(velocities, axis=0)) / acceleration
+    weights_start = np.full(len(durations), 0.5)
+    weights_end = np.full(len(durations), 0.5)
+    weights_start[0] = weights_end[-1] = 1.0
+    linear_durations = (
+        h - weights_start[:, None] * blend_times[:-1] - weights_end[:, None] * blend_times[1:])
+    return blend_times, velocities, linear_durations, np.stack([first_disc, last_disc])
+
+
+def _first_problem(
+    timing: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], durations: np.ndarray
+) -> tuple[int, str] | None:
+    """Find the first joint whose blends do not fit, with a sentence saying where."""
+    blend_times, _, linear_durations, discriminants = timing
+    slack = _FEASIBILITY_TOLERANCE * durations[:, None]
+    end_durations = np.array([[durations[0]], [durations[-1]]])
+    bad_ends = discriminants < -_FEASIBILITY_TOLERANCE * end_durations**2
+    bad_linear = linear_durations < -slack
+    for joint in range(blend_times.shape[1]):
+        if bad_ends[0, joint]:
+            return joint, (f'the blend at point 0 cannot reach the first segment\'s line within '
+                           f'its {durations[0]:g} s')
+        if bad_ends[1, joint]:
+            last = len(blend_times) - 1
+            return joint, (f'the blend at point {last} cannot leave the last segment\'s line '
+                           f'within its {durations[-1]:g} s')
+        overlapping = np.flatnonzero(bad_linear[:, joint])
+        if overlapping.size:
+            segment = int(overlapping[0])
+            return joint, (f'the blends at points {segment} and {segment + 1} overlap (the '
+                           f'linear part of segment {segment} would last '
+                           f'{linear_durations[segment, joint]:.3g} s)')
+    return None
+
+
+def _fits(
+    path: np.ndarray, durations: np.ndarray, acceleration: np.ndarray, start_velocity: np.ndarray
+) -> np.ndarray:
+    """Tell per joint whether all blends fit with this acceleration."""
+    _, _, linear_durations, discriminants = _via_timing(
+        path, durations, acceleration, start_velocity)
+    return (linear_durations >= 0.0).all(axis=0) & (discriminants >= 0.0).all(axis=0)
+
+
+def _smallest_fitting_acceleration(
+    path: np.ndarray, durations: np.ndarray, acceleration: np.ndarray, start_velocity: np.ndarray
+) -> np.ndarray:
+    """
+    Per joint, the smallest acceleration with which every blend fits (bisection).
+
+    Blends shrink as the acceleration grows, so feasibility is monotonic in it.
+    """
+    high = acceleration.copy()
+    for _ in range(200):
+        fitting = _fits(path, durations, high, start_velocity)
+        if fitting.all():
+            break
+        high = np.where(fitting, high, 2.0 * high)
+    low = acceleration.copy()
+    for _ in range(_BISECTION_STEPS):
+        middle = 0.5 * (low + high)
+        fitting = _fits(path, durations, middle, start_velocity)
+        high = np.where(fitting, middle, high)
+        low = np.where(fitting, low, middle)
+    return high
+
+
+def _assemble(
+    path: np.ndarray,
+    durations: np.ndarray,
+    blend_times: np.ndarray,
+    velocities: np.ndarray,
+    start_velocity: np.ndarray,
+    acceleration: np.ndarray,
+) -> BlendedTrajectory:
+    """
+    Pieces blend 0, line 0, blend 1, …, line n-2, blend n-1 for every joint.
+
+    Interior blends are centred on their via time; the first starts at 0 and the last
+    ends at the total duration. Each line passes through its segment's far point at that
+    point's time (the last one through its near point), which is how Craig defines the
+    linear velocities.
+    """
+    via_times = np.concatenate(([0.0], np.cumsum(durations)))
+    total = via_times[-1]
+    segment_count = len(durations)
+    blend_starts = via_times[:, None] - 0.5 * blend_times
+    blend_starts[0] = 0.0
+    blend_starts[-1] = total - blend_times[-1]
+    linear_starts = blend_starts[:-1] + blend_times[:-1]
+    # A point each line passes through: (time, position).
+    anchor = np.arange(1, segment_count + 1)
+    anchor[-1] = segment_count - 1 if segment_count > 1 else segment_count
+    anchor_times, anchor_positions = via_times[anchor][:, None], path[anchor]
+
+    def on_line(segment: np.ndarray, times: np.ndarray) -> np.ndarray:
+        return anchor_positions[segment] + velocities[segment] * (times - anchor_times[segment])
+
+    segments = np.arange(segment_count)
+    blend_positions = np.empty_like(path)
+    blend_positions[0] = path[0]
+    blend_positions[1:] = on_line(segments, blend_starts[1:])
+    if segment_count == 1:
+        # The single-segment line is anchored by its end: it passes through the goal at
+        # the moment a zero-length last blend would end.
+        blend_positions[1] = path[1] - 0.5 * velocities[0] * blend_times[1]
+    incoming = np.concatenate([start_velocity[None], velocities])
+    linear_positions = (
+        blend_positions[:-1] + 0.5 * (incoming[:-1] + velocities) * blend_times[:-1])
+    outgoing = np.concatenate([velocities, np.zeros_like(path[:1])])
+    blend_accelerations = np.sign(outgoing - incoming) * acceleration
+
+    piece_count = 2 * len(path) - 1
+    joint_count = path.shape[1]
+    starts = np.empty((piece_count + 1, joint_count))
+    coefficients = np.zeros((piece_count, 3, joint_count))
+    starts[0:-1:2], starts[1:-1:2], starts[-1] = blend_starts, linear_starts, total
+    coefficients[0::2, 0], coefficients[1::2, 0] = blend_positions, linear_positions
+    coefficients[0::2, 1], coefficients[1::2, 1] = incoming, velocities
+    coefficients[0::2, 2] = 0.5 * blend_accelerations
+    linear_durations = np.diff(starts, axis=0)[1::2]
+    return BlendedTrajectory(starts, coefficients, blend_times, velocities, linear_durations)
+
+
+def _round_up(value: float, digits: int = 4) -> str:
+    """``value`` rounded up to ``digits`` significant digits, so the printed number works."""
+    if value <= 0.0 or not math.isfinite(value):
+        return f'{value:g}'
+    step = 10.0 ** (math.floor(math.log10(value)) - digits + 1)
+    return f'{math.ceil(value / step - 1e-9) * step:.{digits}g}'

@@ -1,0 +1,37 @@
+"""
+The public trajectory API: every Craig ch. 7 profile and minimum-time timing.
+
+Positions are scalars (one joint) or 1-D arrays (one value per joint); via points are
+``(points,)`` or ``(points, joints)``. Every result is a :class:`Trajectory`. Units are
+SI: rad (or m), s.
+"""
+
+from traj_gen_ros.blends import BlendedTrajectory, lspb, lspb_via
+from traj_gen_ros.polynomial import (
+    continuous_velocities,
+    cubic,
+    cubic_via,
+    heuristic_velocities,
+    quintic,
+    quintic_via,
+)
+from traj_gen_ros.timing import PROFILES, hold, min_time, via_durations, within_limits
+from traj_gen_ros.trajectory import Trajectory
+
+__all__ = [
+    'PROFILES',
+    'BlendedTrajectory',
+    'Trajectory',
+    'continuous_velocities',
+    'cubic',
+    'cubic_via',
+    'heuristic_velocities',
+    'hold',
+    'lspb',
+    'lspb_via',
+    'min_time',
+    'quintic',
+    'quintic_via',
+    'via_durations',
+    'within_limits',
+]

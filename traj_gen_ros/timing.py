@@ -1,0 +1,228 @@
+"""
+Minimum-time timing from velocity and acceleration limits, all joints synchronised.
+
+For each joint the shortest duration that keeps ``|velocity| ≤ max_velocity`` and
+``|acceleration| ≤ max_acceleration`` is found; the slowest joint sets the duration and
+every joint starts and arrives together.
+
+Rest-to-rest peaks (distance ``D``, duration ``T``), used in closed form:
+- LSPB: the time-optimal trapezoid, ``T = D/v + v/a`` when ``D ≥ v²/a``, else the
+  triangle ``T = 2 sqrt(D/a)``.
+- cubic eq. (6): peak velocity ``1.5 D/T``, peak acceleration ``6 D/T²``.
+- quintic: peak velocity ``15/8 D/T``, peak acceleration ``10/sqrt(3) D/T²``.
+From a moving start (an extension for replanning) the duration is found by bisection on
+the exact peaks of the planned trajectory.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from traj_gen_ros import validation
+from traj_gen_ros.blends import lspb, lspb_via
+from traj_gen_ros.polynomial import cubic, cubic_via, quintic, quintic_via
+from traj_gen_ros.trajectory import Trajectory
+from traj_gen_ros.validation import ArrayLike
+
+PROFILES = ('lspb', 'cubic', 'quintic')
+# (peak velocity, peak acceleration) of a rest-to-rest unit move in unit time.
+_POLYNOMIAL_PEAKS = {'cubic': (1.5, 6.0), 'quintic': (15.0 / 8.0, 10.0 / np.sqrt(3.0))}
+_LIMIT_TOLERANCE = 1e-9
+_BISECTION_STEPS = 60
+
+
+def min_time(
+    q0: ArrayLike,
+    qf: ArrayLike,
+    max_velocity: ArrayLike,
+    max_acceleration: ArrayLike,
+    profile: str = 'lspb',
+    v0: ArrayLike = 0.0,
+    a0: ArrayLike = 0.0,
+) -> Trajectory:
+    """
+    Plan the shortest synchronised ``profile`` trajectory from ``q0`` to rest at ``qf``.
+
+    :param q0: start position (rad), scalar or one per joint.
+    :param qf: goal position (rad), scalar or one per joint.
+    :param max_velocity: velocity limit (rad/s), scalar or one per joint.
+    :param max_acceleration: acceleration limit (rad/s²), scalar or one per joint.
+    :param profile: ``"lspb"`` (time-optimal trapezoid, triangular when the velocity limit is
+        never reached), ``"cubic"`` or ``"quintic"`` (the duration at which the
+        binding limit is just met).
+    :param v0: start velocity (rad/s), extension for replanning a moving joint.
+    :param a0: start acceleration (rad/s²), used by the quintic only.
+
+    For LSPB from rest every other joint runs its own optimal trapezoid stretched in time
+    to the common duration (acceleration scaled by ``(T_joint/T)²``), so none exceeds a
+    limit and all arrive together. A motion of zero length gives a zero-duration
+    trajectory that holds ``q0``.
+
+    """
+    rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0, a0=a0)
+    start, goal, start_velocity, start_acceleration = rows
+    joint_count = rows.shape[1]
+    max_velocity = validation.positive_per_joint('max_velocity', max_velocity, joint_count)
+    max_acceleration = validation.positive_per_joint(
+        'max_acceleration', max_acceleration, joint_count)
+    if profile not in PROFILES:
+        raise ValueError(f'profile must be one of {", ".join(PROFILES)}, got "{profile}"')
+    if np.any(start_velocity) or np.any(start_acceleration):
+        return _moving_min_time(
+            start, goal, max_velocity, max_acceleration, profile, start_velocity,
+            start_acceleration)
+    distance = np.abs(goal - start)
+    joint_times = rest_to_rest_times(distance, max_velocity, max_acceleration, profile)
+    duration = float(joint_times.max())
+    if duration == 0.0:
+        return hold(start)
+    if profile == 'cubic':
+        return cubic(start, goal, duration)
+    if profile == 'quintic':
+        return quintic(start, goal, duration)
+    stretch = np.where(joint_times > 0.0, (joint_times / duration) ** 2, 1.0)
+    return lspb(start, goal, duration, max_acceleration * stretch)
+
+
+def rest_to_rest_times(
+    distance: np.ndarray, max_velocity: np.ndarray, max_acceleration: np.ndarray, profile: str
+) -> np.ndarray:
+    """Each joint's own shortest rest-to-rest duration (s) for ``distance`` (rad)."""
+    if profile == 'lspb':
+        cruising = distance >= max_velocity**2 / max_acceleration
+        trapezoid = distance / max_velocity + max_velocity / max_acceleration
+        triangle = 2.0 * np.sqrt(distance / max_acceleration)
+        return np.where(cruising, trapezoid, triangle)
+    velocity_peak, acceleration_peak = _POLYNOMIAL_PEAKS[profile]
+    return np.maximum(velocity_peak * distance / max_velocity,
+                      np.sqrt(acceleration_peak * distance / max_acceleration))
+
+
+def hold(positions: ArrayLike) -> Trajectory:
+    """Return a zero-duration trajectory that holds ``positions`` (rad) at rest."""
+    positions = validation.per_joint_rows(positions=positions)[0]
+    coefficients = np.zeros((1, 1, positions.size))
+    coefficients[0, 0] = positions
+    return Trajectory(np.zeros(2), coefficients)
+
+
+def within_limits(
+    trajectory: Trajectory, max_velocity: np.ndarray, max_acceleration: np.ndarray
+) -> bool:
+    """Tell whether no joint's exact peak exceeds its limits (relative tolerance 1e-9)."""
+    peak_velocity, peak_acceleration = trajectory.peaks()
+    return bool(np.all(peak_velocity <= max_velocity * (1.0 + _LIMIT_TOLERANCE))
+                and np.all(peak_acceleration <= max_acceleration * (1.0 + _LIMIT_TOLERANCE)))
+
+
+def shortest_duration(
+    plan: Callable[[float], Trajectory],
+    lower: float,
+    max_velocity: np.ndarray,
+    max_acceleration: np.ndarray,
+) -> Trajectory:
+    """
+    Find the shortest-duration ``plan(duration)`` within limits, by doubling then bisection.
+
+    ``lower`` (s, > 0) is a duration no feasible plan is shorter than. A plan that raises
+    ``ValueError`` (a blend that cannot fit) counts as infeasible.
+    """
+    def feasible(duration: float) -> Trajectory | None:
+        try:
+            candidate = plan(duration)
+        except ValueError:
+            return None
+        return candidate if within_limits(candidate, max_velocity, max_acceleration) else None
+
+    best = feasible(lower)
+    if best is not None:
+        return best
+    low, high = lower, 2.0 * lower
+    while (best := feasible(high)) is None:
+        low, high = high, 2.0 * high
+        if high > 1e9:
+            raise ValueError('no duration up to 1e9 s keeps the motion within its limits')
+    for _ in range(_BISECTION_STEPS):
+        middle = 0.5 * (low + high)
+        candidate = feasible(middle)
+        if candidate is None:
+            low = middle
+        else:
+            high, best = middle, candidate
+        if high - low <= 1e-9 * high:
+            break
+    return best
+
+
+def via_durations(
+    points: ArrayLike,
+    max_velocity: ArrayLike,
+    max_acceleration: ArrayLike,
+    profile: str = 'cubic',
+    velocities: str = 'heuristic',
+    acceleration: ArrayLike | None = None,
+) -> np.ndarray:
+    """
+    Segment durations (s) that keep a via-point path within the limits.
+
+    Each segment starts from its own rest-to-rest minimum time for the slowest joint;
+    the whole path is then stretched by one factor, found by bisection on the exact peaks
+    of the planned ``profile`` (``cubic``/``quintic`` with ``velocities``, or ``lspb`` with
+    blend ``acceleration``, default ``max_acceleration``), until no limit is exceeded.
+    """
+    path = validation.path_points(points)
+    joint_count = path.shape[1]
+    max_velocity = validation.positive_per_joint('max_velocity', max_velocity, joint_count)
+    max_acceleration = validation.positive_per_joint(
+        'max_acceleration', max_acceleration, joint_count)
+    if profile not in PROFILES:
+        raise ValueError(f'profile must be one of {", ".join(PROFILES)}, got "{profile}"')
+    steps = np.abs(np.diff(path, axis=0))
+    base = rest_to_rest_times(steps, max_velocity, max_acceleration, profile).max(axis=1)
+    if not base.any():
+        raise ValueError('every via point equals the start: there is nothing to move')
+    base = np.maximum(base, 1e-6 * base.max())
+    blend_acceleration = max_acceleration if acceleration is None else acceleration
+    planners = {
+        'cubic': lambda durations: cubic_via(path, durations, velocities),
+        'quintic': lambda durations: quintic_via(path, durations, velocities),
+        'lspb': lambda durations: lspb_via(path, durations, blend_acceleration),
+    }
+    plan = planners[profile]
+    best = shortest_duration(lambda scale: plan(base * scale), 1.0,
+                             max_velocity, max_acceleration)
+    return base * (best.duration / base.sum())
+
+
+def _moving_min_time(
+    start: np.ndarray,
+    goal: np.ndarray,
+    max_velocity: np.ndarray,
+    max_acceleration: np.ndarray,
+    profile: str,
+    start_velocity: np.ndarray,
+    start_acceleration: np.ndarray,
+) -> Trajectory:
+    """
+    Shortest synchronised plan from a moving state to rest at ``goal``.
+
+    A start already beyond a limit (limits lowered mid-motion) is allowed to stay at
+    that level while it slows down, so a plan always exists.
+    """
+    max_velocity = np.maximum(max_velocity, np.abs(start_velocity))
+    max_acceleration = np.maximum(max_acceleration, np.abs(start_acceleration))
+    distance = np.abs(goal - start)
+    stopping = start_velocity**2 / (2.0 * max_acceleration)
+    lower = float(np.max(rest_to_rest_times(distance + stopping, max_velocity,
+                                            max_acceleration, profile)))
+    lower = max(lower * 0.25, float(np.max(np.abs(start_velocity) / max_acceleration)), 1e-6)
+    planners = {
+        'cubic': lambda duration: cubic(start, goal, duration, v0=start_velocity),
+        'quintic': lambda duration: quintic(start, goal, duration, v0=start_velocity,
+                                            a0=start_acceleration),
+        'lspb': lambda duration: lspb(start, goal, duration, max_acceleration,
+                                      v0=start_velocity),
+    }
+    return shortest_duration(planners[profile], lower, max_velocity, max_acceleration)

@@ -1,0 +1,140 @@
+"""
+Input checks shared by every profile, done before any math runs.
+
+Each function returns clean float64 arrays or raises ``ValueError`` saying what is wrong,
+where (which argument, joint or point) and what would be valid.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+ArrayLike = float | Sequence[float] | np.ndarray
+
+
+def _describe_bad(values: np.ndarray) -> str:
+    """Name the first non-finite entry of a 1-D or 2-D array (index and value)."""
+    index = tuple(int(i) for i in np.argwhere(~np.isfinite(values))[0])
+    if len(index) == 2:
+        return f'point {index[0]}, joint {index[1]} is {values[index]}'
+    return f'joint {index[0]} is {values[index]}' if index else f'it is {values}'
+
+
+def finite_array(name: str, value: ArrayLike, max_ndim: int) -> np.ndarray:
+    """``value`` as a float array of at most ``max_ndim`` dimensions with finite entries."""
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f'{name} must be numbers: {error}') from None
+    if array.ndim > max_ndim:
+        raise ValueError(f'{name} has {array.ndim} dimensions; at most {max_ndim} allowed')
+    if not np.isfinite(array).all():
+        raise ValueError(f'{name} must be finite: {_describe_bad(array)}')
+    return array
+
+
+def joint_count_of(**values: np.ndarray) -> int:
+    """Return the joint count that scalars and 1-D per-joint arrays agree on."""
+    sizes = {name: array.size for name, array in values.items() if array.ndim == 1}
+    if not sizes:
+        return 1
+    counts = set(sizes.values())
+    if len(counts) > 1:
+        listed = ', '.join(f'{name} has {size}' for name, size in sizes.items())
+        raise ValueError(f'per-joint arrays disagree in length ({listed}); give one per joint')
+    count = counts.pop()
+    if count == 0:
+        raise ValueError('no joints: per-joint arrays are empty')
+    return count
+
+
+def duration_of(value: float, name: str = 'duration') -> float:
+    """Return ``value`` as a finite, strictly positive duration in seconds."""
+    array = finite_array(name, value, max_ndim=0)
+    if array <= 0.0:
+        raise ValueError(f'{name} must be > 0 s, got {float(array)}')
+    return float(array)
+
+
+def positive_per_joint(name: str, value: ArrayLike, joint_count: int) -> np.ndarray:
+    """Return a per-joint limit (one for all, or one per joint), finite and > 0: ``(joints,)``."""
+    array = finite_array(name, value, max_ndim=1)
+    if array.ndim == 1 and array.size != joint_count:
+        raise ValueError(f'{name} has {array.size} values for {joint_count} joints; '
+                         'give one value, or one per joint')
+    array = np.broadcast_to(array, (joint_count,)).astype(float)
+    bad = np.flatnonzero(array <= 0.0)
+    if bad.size:
+        raise ValueError(f'{name} must be > 0; joint {bad[0]} has {array[bad[0]]}')
+    return array
+
+
+def path_points(points: ArrayLike) -> np.ndarray:
+    """Via points shaped ``(points,)`` or ``(points, joints)`` as ``(points, joints)``."""
+    array = finite_array('points', points, max_ndim=2)
+    if array.ndim == 0:
+        raise ValueError('points must be a sequence of at least 2 positions, got a scalar')
+    if array.ndim == 1:
+        array = array[:, None]
+    if array.shape[0] < 2:
+        raise ValueError(f'points needs at least 2 points (start and goal), got {len(array)}')
+    if array.shape[1] == 0:
+        raise ValueError('points has no joints')
+    return array
+
+
+def segment_durations(durations: ArrayLike, segment_count: int) -> np.ndarray:
+    """One finite, strictly positive duration per segment, ``(segments,)``."""
+    array = np.atleast_1d(finite_array('durations', durations, max_ndim=1))
+    if array.size != segment_count:
+        raise ValueError(f'durations has {array.size} entries for {segment_count} segments '
+                         f'({segment_count + 1} points); give one per segment')
+    bad = np.flatnonzero(array <= 0.0)
+    if bad.size:
+        raise ValueError(f'durations must be > 0 s; segment {bad[0]} has {array[bad[0]]}')
+    return array
+
+
+def per_point(name: str, value: ArrayLike, shape: tuple[int, int]) -> np.ndarray:
+    """Return a value at every path point as ``(points, joints)``."""
+    array = finite_array(name, value, max_ndim=2)
+    if array.ndim == 1 and shape[1] == 1:
+        array = array[:, None]
+    if array.shape != shape:
+        raise ValueError(f'{name} is shaped {array.shape}; expected {shape} '
+                         '(one value per point and joint)')
+    return array
+
+
+def per_joint_rows(like: np.ndarray | None = None, **values: ArrayLike) -> np.ndarray:
+    """
+    Scalars or per-joint 1-D arrays stacked as rows, ``(len(values), joints)``.
+
+    The joint count is the one the 1-D arrays agree on (or ``like.size``); scalars apply
+    to every joint. One finiteness check covers all rows; a failure names the argument.
+    """
+    arrays = {}
+    for name, value in values.items():
+        try:
+            array = np.asarray(value, dtype=float)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f'{name} must be numbers: {error}') from None
+        if array.ndim > 1:
+            raise ValueError(f'{name} must be a scalar or one value per joint, '
+                             f'got shape {array.shape}')
+        arrays[name] = array
+    if like is not None:
+        arrays_and_like = dict(arrays, points=np.asarray(like).reshape(-1))
+        count = joint_count_of(**arrays_and_like)
+    else:
+        count = joint_count_of(**arrays)
+    rows = np.empty((len(arrays), count))
+    for row, array in enumerate(arrays.values()):
+        rows[row] = array
+    if not np.isfinite(rows).all():
+        for name, array in arrays.items():
+            if not np.isfinite(array).all():
+                raise ValueError(f'{name} must be finite: {_describe_bad(np.atleast_1d(array))}')
+    return rows
