@@ -1,0 +1,245 @@
+"""Test harness: run the generator as a subprocess and talk to it over DDS.
+
+Importing this module isolates the test process: its own ROS_DOMAIN_ID (from the pid)
+and discovery limited to localhost; the node subprocesses inherit the same environment.
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import rclpy
+from builtin_interfaces.msg import Duration
+from diagnostic_msgs.msg import DiagnosticStatus
+from rcl_interfaces.msg import Parameter as ParameterMsg
+from rcl_interfaces.srv import SetParameters
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.time import Time
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+REPO = Path(__file__).resolve().parents[1]
+CONFIG = REPO / 'config' / 'generator.yaml'
+JOINTS = [f'joint_{index}' for index in range(1, 7)]
+MAX_VELOCITY = np.array([2.0, 2.0, 2.0, 3.0, 3.0, 3.0])
+MAX_ACCELERATION = np.array([4.0, 4.0, 4.0, 6.0, 6.0, 6.0])
+
+DOMAIN_ID = 1 + (os.getpid() + int(os.environ.get('PYTEST_XDIST_WORKER', 'gw0')[2:] or 0)) % 100
+os.environ['ROS_DOMAIN_ID'] = str(DOMAIN_ID)
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+os.environ.pop('ROS_LOCALHOST_ONLY', None)
+
+
+def node_env(extra_pythonpath: bool = True) -> dict:
+    """Environment for a node subprocess: same domain, unbuffered, repo importable."""
+    env = dict(os.environ)
+    env['PYTHONUNBUFFERED'] = '1'
+    if extra_pythonpath:
+        env['PYTHONPATH'] = os.pathsep.join(
+            [str(REPO)] + [p for p in env.get('PYTHONPATH', '').split(os.pathsep) if p])
+    return env
+
+
+class NodeProcess:
+    """A generator node subprocess; output goes to a temporary log file."""
+
+    def __init__(self, *ros_args: str, command: list | None = None, env: dict | None = None,
+                 params_file: Path | None = CONFIG, cwd: Path | None = None):
+        self.log = tempfile.NamedTemporaryFile('w+', prefix='generator_', suffix='.log')
+        args = ['--ros-args']
+        if params_file is not None:
+            args += ['--params-file', str(params_file)]
+        args += list(ros_args)
+        command = command or [sys.executable, '-m', 'traj_gen_ros.generator_node']
+        self.process = subprocess.Popen(command + args, stdout=self.log,
+                                        stderr=subprocess.STDOUT, env=env or node_env(),
+                                        cwd=str(cwd or REPO))
+
+    def output(self) -> str:
+        """Everything the process printed so far."""
+        self.log.flush()
+        return Path(self.log.name).read_text()
+
+    def stop(self, sig: int = signal.SIGINT, timeout: float = 10.0) -> int:
+        """Signal the process and wait; kill it if it does not end in time."""
+        if self.process.poll() is None:
+            self.process.send_signal(sig)
+            try:
+                self.process.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        return self.process.returncode
+
+    def close(self) -> None:
+        """Make sure the process is gone and the log is removed."""
+        try:
+            if self.process.poll() is None:
+                self.process.kill()
+                self.process.wait()
+        finally:
+            self.log.close()
+
+
+def stamp_ns(stamp) -> int:
+    """Nanoseconds of a ``builtin_interfaces/Time``."""
+    return Time.from_msg(stamp).nanoseconds
+
+
+def seconds(duration: Duration) -> float:
+    """Seconds of a ``builtin_interfaces/Duration``."""
+    return duration.sec + duration.nanosec * 1e-9
+
+
+def trajectory_arrays(message: JointTrajectory):
+    """Times, positions, velocities, accelerations of a JointTrajectory as arrays."""
+    times = np.array([seconds(p.time_from_start) for p in message.points])
+    positions = np.array([p.positions for p in message.points])
+    velocities = np.array([p.velocities for p in message.points])
+    accelerations = np.array([p.accelerations for p in message.points])
+    return times, positions, velocities, accelerations
+
+
+def via_message(names, points, stamp=None) -> JointTrajectory:
+    """A JointTrajectory from ``[(positions, time, velocities?, accelerations?), ...]``."""
+    message = JointTrajectory(joint_names=list(names))
+    if stamp is not None:
+        message.header.stamp = stamp
+    for point in points:
+        positions, time_from_start = point[0], point[1]
+        sec = int(np.floor(time_from_start))
+        message.points.append(JointTrajectoryPoint(
+            positions=[float(x) for x in positions],
+            velocities=[float(x) for x in (point[2] if len(point) > 2 else [])],
+            accelerations=[float(x) for x in (point[3] if len(point) > 3 else [])],
+            time_from_start=Duration(sec=sec, nanosec=int(round((time_from_start - sec) * 1e9)))))
+    return message
+
+
+class Probe(Node):
+    """A second node that drives the generator and records what it publishes."""
+
+    def __init__(self, generator: str = '/trajectory_generator',
+                 joint_states: str = '/joint_states', name: str = 'probe'):
+        super().__init__(f'{name}_{os.getpid()}')
+        reliable = ReliabilityPolicy.RELIABLE
+        self.generator = generator
+        self.states: list[JointState] = []
+        self.trajectories: list[JointTrajectory] = []
+        self.statuses: list[DiagnosticStatus] = []
+        self.state_times: list[float] = []
+        self.create_subscription(JointState, joint_states, self._on_state,
+                                 QoSProfile(depth=1000, reliability=reliable))
+        self.create_subscription(
+            JointTrajectory, f'{generator}/trajectory', self.trajectories.append,
+            QoSProfile(depth=1, reliability=reliable,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL))
+        self.create_subscription(DiagnosticStatus, f'{generator}/status', self.statuses.append,
+                                 QoSProfile(depth=100, reliability=reliable))
+        self.goal_pub = self.create_publisher(JointState, f'{generator}/goal', 10)
+        self.via_pub = self.create_publisher(JointTrajectory, f'{generator}/via_points', 10)
+        self.stop_client = self.create_client(Trigger, f'{generator}/stop')
+        self.param_client = self.create_client(SetParameters, f'{generator}/set_parameters')
+
+    def _on_state(self, message: JointState) -> None:
+        self.state_times.append(time.monotonic())
+        self.states.append(message)
+
+    # -- spinning
+
+    def spin_until(self, condition, timeout: float = 10.0, what: str = 'condition'):
+        """Spin until ``condition()`` is truthy; return its value or fail after ``timeout``."""
+        deadline = time.monotonic() + timeout
+        while True:
+            value = condition()
+            if value:
+                return value
+            if time.monotonic() > deadline:
+                raise AssertionError(f'timed out after {timeout} s waiting for {what}')
+            rclpy.spin_once(self, timeout_sec=0.005)
+
+    def wait_ready(self, timeout: float = 20.0) -> None:
+        """Wait until the generator streams and all our endpoints are matched."""
+        self.spin_until(lambda: len(self.states) > 2 and self.goal_pub.get_subscription_count()
+                        and self.via_pub.get_subscription_count()
+                        and self.count_publishers(f'{self.generator}/status')
+                        and self.stop_client.service_is_ready()
+                        and self.param_client.service_is_ready(), timeout, 'the generator')
+
+    # -- state
+
+    def latest(self) -> JointState:
+        """Most recent JointState."""
+        return self.states[-1]
+
+    def position(self) -> np.ndarray:
+        """Most recent positions."""
+        return np.array(self.latest().position)
+
+    def wait_at_rest(self, timeout: float = 10.0) -> np.ndarray:
+        """Wait until the stream holds still (ten zero-velocity samples); return position."""
+        def resting():
+            tail = self.states[-10:]
+            return len(tail) == 10 and all(not any(s.velocity) for s in tail) and \
+                len({tuple(s.position) for s in tail}) == 1
+        self.spin_until(resting, timeout, 'the stream to hold still')
+        return self.position()
+
+    def states_between(self, start_ns: int, end_ns: int | None = None):
+        """Stamps (s, relative to ``start_ns``), positions and velocities in a window."""
+        rows = [s for s in self.states if stamp_ns(s.header.stamp) >= start_ns
+                and (end_ns is None or stamp_ns(s.header.stamp) <= end_ns)]
+        times = np.array([(stamp_ns(s.header.stamp) - start_ns) * 1e-9 for s in rows])
+        return times, np.array([s.position for s in rows]), np.array([s.velocity for s in rows])
+
+    # -- requests
+
+    def _next_status(self, send, timeout: float) -> DiagnosticStatus:
+        count = len(self.statuses)
+        send()
+        self.spin_until(lambda: len(self.statuses) > count, timeout, 'a status message')
+        return self.statuses[count]
+
+    def request(self, message, timeout: float = 10.0):
+        """Publish a goal or via points; return ``(status, trajectory or None)``."""
+        publisher = self.via_pub if isinstance(message, JointTrajectory) else self.goal_pub
+        count = len(self.trajectories)
+        status = self._next_status(lambda: publisher.publish(message), timeout)
+        if status.level != DiagnosticStatus.OK:
+            return status, None
+        self.spin_until(lambda: len(self.trajectories) > count, timeout, 'the trajectory')
+        return status, self.trajectories[-1]
+
+    def goal(self, positions: dict, timeout: float = 10.0):
+        """Send a goal ``{joint: position}``; return ``(status, trajectory)``."""
+        message = JointState(name=list(positions),
+                             position=[float(v) for v in positions.values()])
+        return self.request(message, timeout)
+
+    def stop(self, timeout: float = 10.0) -> Trigger.Response:
+        """Call ``~/stop``."""
+        future = self.stop_client.call_async(Trigger.Request())
+        self.spin_until(future.done, timeout, 'the stop service')
+        return future.result()
+
+    def set_parameters(self, timeout: float = 10.0, **values):
+        """Set generator parameters; return the list of SetParametersResult."""
+        request = SetParameters.Request(parameters=[
+            ParameterMsg(name=name, value=Parameter(name, value=value).get_parameter_value())
+            for name, value in values.items()])
+        future = self.param_client.call_async(request)
+        self.spin_until(future.done, timeout, 'set_parameters')
+        return future.result().results
+
+    def require_parameters(self, **values) -> None:
+        """Set parameters and assert they were accepted."""
+        results = self.set_parameters(**values)
+        assert all(r.successful for r in results), [r.reason for r in results]
