@@ -144,8 +144,8 @@ def per_joint(name: str, value: object, joint_count: int, allow_zero: bool = Fal
     bound = 'non-negative' if allow_zero else 'positive'
     for index, item in enumerate(array):
         if not math.isfinite(item) or item < 0.0 or (item == 0.0 and not allow_zero):
-            raise ValueError(f'{name}[{index}] = {item!r}: every value must be finite and '
-                             f'{bound}')
+            raise ValueError(f'{name}[{index}] = {float(item)!r}: every value must be finite '
+                             f'and {bound}')
     return array
 
 
@@ -442,10 +442,11 @@ def via_points(joints: Sequence[str], state: State, hold: np.ndarray, request: V
     Full-joint points starting at the current setpoint, and their times.
 
     Rule: the executed trajectory starts at the current setpoint. A first point at
-    ``time_from_start`` 0 must equal the current position (within ``START_TOLERANCE``) and
-    becomes point 0; otherwise the current setpoint is prepended as point 0 at t=0. When all
-    times are zero (auto-timing) a first point equal to the current position is dropped.
-    Joints not named stay at ``hold`` at every point (zero velocity/acceleration there).
+    ``time_from_start`` 0 must equal the current position of the joints it names (within
+    ``START_TOLERANCE``) and stands for the start; otherwise the current setpoint is
+    prepended as point 0 at t=0. When all times are zero (auto-timing) a first point at the
+    current position is dropped likewise. Joints not named stay at ``hold`` at every point
+    (with zero velocity/acceleration there).
     Returns ``(points, times or None when auto-timed, velocities, accelerations)``.
     """
     state = _as_state(state)
@@ -461,10 +462,13 @@ def via_points(joints: Sequence[str], state: State, hold: np.ndarray, request: V
         accelerations[:, request.joints] = request.accelerations
     times = request.times.copy()
     first_is_start = False
+    named = request.joints
     if request.auto_timed:
-        first_is_start = np.allclose(points[0], state.position, rtol=0.0, atol=START_TOLERANCE)
+        first_is_start = np.allclose(points[0, named], state.position[named], rtol=0.0,
+                                     atol=START_TOLERANCE)
     elif times[0] == 0.0:
-        offset = np.abs(points[0] - state.position)
+        offset = np.zeros_like(state.position)
+        offset[named] = np.abs(points[0, named] - state.position[named])
         joint = int(np.argmax(offset))
         if offset[joint] > START_TOLERANCE:
             raise RequestError(
