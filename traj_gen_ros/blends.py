@@ -29,26 +29,27 @@ _BISECTION_STEPS = 80
 
 class BlendedTrajectory(Trajectory):
     """
-    An LSPB trajectory with Craig's timing table.
+    An LSPB trajectory: pieces alternate blend, line, blend, …, blend per joint.
 
-    :ivar blend_times: blend duration at every point (s), ``(points, joints)``.
-    :ivar linear_velocities: velocity of each linear part (rad/s), ``(segments, joints)``.
-    :ivar linear_durations: duration of each linear part (s), ``(segments, joints)``.
-
+    Craig's timing table is read off the pieces: ``blend_times`` (s, ``(points, joints)``),
+    ``linear_velocities`` (rad/s, ``(segments, joints)``) and ``linear_durations``
+    (s, ``(segments, joints)``).
     """
 
-    def __init__(
-        self,
-        breakpoints: np.ndarray,
-        coefficients: np.ndarray,
-        blend_times: np.ndarray,
-        linear_velocities: np.ndarray,
-        linear_durations: np.ndarray,
-    ) -> None:
-        super().__init__(breakpoints, coefficients)
-        self.blend_times = blend_times
-        self.linear_velocities = linear_velocities
-        self.linear_durations = linear_durations
+    @property
+    def blend_times(self) -> np.ndarray:
+        """Blend duration at every point (s), ``(points, joints)``."""
+        return np.diff(self.breakpoints, axis=0)[0::2]
+
+    @property
+    def linear_durations(self) -> np.ndarray:
+        """Duration of every linear part (s), ``(segments, joints)``."""
+        return np.diff(self.breakpoints, axis=0)[1::2]
+
+    @property
+    def linear_velocities(self) -> np.ndarray:
+        """Velocity of every linear part (rad/s), ``(segments, joints)``."""
+        return self.coefficients[1::2, 1]
 
 
 def lspb(
@@ -71,18 +72,64 @@ def lspb(
     monotonically with it) and both blends use ``acceleration``.
     """
     rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0)
-    start, goal, start_velocity = rows
     duration = validation.duration_of(duration)
     acceleration = validation.positive_per_joint('acceleration', acceleration, rows.shape[1])
-    if np.any(start_velocity):
-        cruise = _moving_start_cruise(goal - start, duration, acceleration, start_velocity)
+    return single_segment(rows[0], rows[1], duration, acceleration, rows[2])
+
+
+def single_segment(
+    start: np.ndarray,
+    goal: np.ndarray,
+    duration: float,
+    acceleration: np.ndarray,
+    start_velocity: np.ndarray,
+) -> BlendedTrajectory:
+    """
+    Plan :func:`lspb` on validated ``(joints,)`` arrays: blend, line, blend.
+
+    The first blend takes ``v0`` to the cruise velocity ``vc``, the last takes ``vc`` to
+    rest; the line between them ends at ``goal - vc t_b/2``, so the goal is met exactly.
+    """
+    displacement = goal - start
+    if start_velocity.any():
+        cruise = _moving_start_cruise(displacement, duration, acceleration, start_velocity)
+        first_blend = np.abs(cruise - start_velocity) / acceleration
+        last_blend = np.abs(cruise) / acceleration
     else:
-        cruise = _rest_start_cruise(goal - start, duration, acceleration)
-    points = np.stack([start, goal])
-    blend_times = np.stack([np.abs(cruise - start_velocity), np.abs(cruise)]) / acceleration
-    return _assemble(
-        points, np.array([duration]), blend_times, cruise[None], start_velocity, acceleration
-    )
+        first_blend = last_blend = _rest_start_blend_time(displacement, duration, acceleration)
+        cruise = np.sign(displacement) * acceleration * first_blend
+    return three_pieces(start, goal, duration, (first_blend, last_blend), cruise,
+                        start_velocity, acceleration)
+
+
+def three_pieces(
+    start: np.ndarray,
+    goal: np.ndarray,
+    duration: float,
+    blend_times: tuple[np.ndarray, np.ndarray],
+    cruise: np.ndarray,
+    start_velocity: np.ndarray,
+    acceleration: np.ndarray,
+) -> BlendedTrajectory:
+    """
+    Assemble blend, line, blend from their timing, all ``(joints,)`` arrays.
+
+    The first blend takes ``start_velocity`` to ``cruise`` in ``blend_times[0]``, the last
+    takes ``cruise`` to rest in ``blend_times[1]``, both at ``acceleration`` (magnitude);
+    the line ends at ``goal - cruise t_b/2``, so the goal is met exactly.
+    """
+    first_blend, last_blend = blend_times
+    breakpoints = np.empty((4, start.size))
+    breakpoints[0], breakpoints[1] = 0.0, first_blend
+    breakpoints[2], breakpoints[3] = duration - last_blend, duration
+    coefficients = np.zeros((3, 3, start.size))
+    coefficients[0, 0], coefficients[0, 1] = start, start_velocity
+    coefficients[0, 2] = 0.5 * np.sign(cruise - start_velocity) * acceleration
+    coefficients[1, 0] = start + 0.5 * (start_velocity + cruise) * first_blend
+    coefficients[1, 1] = coefficients[2, 1] = cruise
+    coefficients[2, 0] = goal - 0.5 * cruise * last_blend
+    coefficients[2, 2] = -0.5 * np.sign(cruise) * acceleration
+    return BlendedTrajectory(breakpoints, coefficients)
 
 
 def lspb_via(
@@ -116,7 +163,7 @@ def lspb_via(
     acceleration = validation.positive_per_joint('acceleration', acceleration, path.shape[1])
     start_velocity = validation.per_joint_rows(v0=v0, like=path[0])[0]
     if len(path) == 2:
-        return lspb(path[0], path[1], durations[0], acceleration, start_velocity)
+        return single_segment(path[0], path[1], durations[0], acceleration, start_velocity)
     timing = _via_timing(path, durations, acceleration, start_velocity)
     problem = _first_problem(timing, durations)
     if problem is not None:
@@ -129,22 +176,24 @@ def lspb_via(
     return _assemble(path, durations, blend_times, velocities, start_velocity, acceleration)
 
 
-def _rest_start_cruise(
+def _rest_start_blend_time(
     displacement: np.ndarray, duration: float, acceleration: np.ndarray
 ) -> np.ndarray:
-    """Cruise velocity ``θ̈ t_b`` of eq. (5), after checking eq. (6) joint by joint."""
-    distance = np.abs(displacement)
-    minimum = 4.0 * distance / duration**2
-    too_low = np.flatnonzero(acceleration < minimum * (1.0 - _FEASIBILITY_TOLERANCE))
-    if too_low.size:
-        joint = too_low[0]
+    """
+    Blend time ``t_b`` of eq. (5), after checking eq. (6) joint by joint.
+
+    ``t_b = t/2 - sqrt(θ̈² t² - 4 θ̈ |Δθ|)/(2 θ̈) = t/2 - sqrt(t² - 4 |Δθ|/θ̈)/2``.
+    """
+    room = duration**2 - 4.0 * np.abs(displacement) / acceleration
+    too_low = room < -_FEASIBILITY_TOLERANCE * duration**2
+    if too_low.any():
+        joint = int(np.argmax(too_low))
+        minimum = 4.0 * abs(displacement[joint]) / duration**2
         raise ValueError(
             f'lspb: joint {joint}: acceleration {acceleration[joint]:g} is too low to move '
             f'{displacement[joint]:g} in {duration:g} s; eq. (6) needs at least '
-            f'{_round_up(minimum[joint])}')
-    root = np.sqrt(np.maximum(acceleration**2 * duration**2 - 4.0 * acceleration * distance, 0.0))
-    blend_time = duration / 2.0 - root / (2.0 * acceleration)
-    return np.sign(displacement) * acceleration * blend_time
+            f'{_round_up(minimum)}')
+    return 0.5 * (duration - np.sqrt(np.maximum(room, 0.0)))
 
 
 def _moving_start_cruise(
@@ -299,7 +348,7 @@ def _assemble(
     acceleration: np.ndarray,
 ) -> BlendedTrajectory:
     """
-    Pieces blend 0, line 0, blend 1, …, line n-2, blend n-1 for every joint.
+    Assemble pieces blend 0, line 0, blend 1, …, line n-2, blend n-1 (three points or more).
 
     Interior blends are centred on their via time; the first starts at 0 and the last
     ends at the total duration. Each line passes through its segment's far point at that
@@ -315,7 +364,7 @@ def _assemble(
     linear_starts = blend_starts[:-1] + blend_times[:-1]
     # A point each line passes through: (time, position).
     anchor = np.arange(1, segment_count + 1)
-    anchor[-1] = segment_count - 1 if segment_count > 1 else segment_count
+    anchor[-1] = segment_count - 1
     anchor_times, anchor_positions = via_times[anchor][:, None], path[anchor]
 
     def on_line(segment: np.ndarray, times: np.ndarray) -> np.ndarray:
@@ -325,10 +374,6 @@ def _assemble(
     blend_positions = np.empty_like(path)
     blend_positions[0] = path[0]
     blend_positions[1:] = on_line(segments, blend_starts[1:])
-    if segment_count == 1:
-        # The single-segment line is anchored by its end: it passes through the goal at
-        # the moment a zero-length last blend would end.
-        blend_positions[1] = path[1] - 0.5 * velocities[0] * blend_times[1]
     incoming = np.concatenate([start_velocity[None], velocities])
     linear_positions = (
         blend_positions[:-1] + 0.5 * (incoming[:-1] + velocities) * blend_times[:-1])
@@ -343,8 +388,7 @@ def _assemble(
     coefficients[0::2, 0], coefficients[1::2, 0] = blend_positions, linear_positions
     coefficients[0::2, 1], coefficients[1::2, 1] = incoming, velocities
     coefficients[0::2, 2] = 0.5 * blend_accelerations
-    linear_durations = np.diff(starts, axis=0)[1::2]
-    return BlendedTrajectory(starts, coefficients, blend_times, velocities, linear_durations)
+    return BlendedTrajectory(starts, coefficients)
 
 
 def _round_up(value: float, digits: int = 4) -> str:

@@ -5,10 +5,10 @@ Equation numbers are those of the lecture (Craig, *Introduction to Robotics*, 3r
 §7.3): cubic eq. (6) rest-to-rest and eq. (9) with boundary velocities, the two-segment
 spline eq. (13), the quintic eq. (3) of "higher-order polynomials".
 
-Every segment is solved in normalised time ``s = t / t_f``: with boundary conditions
-scaled by ``t_f**order``, the coefficients are one constant matrix times the conditions,
-then ``a_k = ã_k / t_f**k``. That is Craig's closed form, written once for all segments
-and joints.
+Every segment is solved in normalised time ``s = t / t_f``, where the coefficients are one
+constant matrix ``M`` (Craig's closed form with ``t_f = 1``) times the conditions scaled by
+``t_f**order``; undoing the scaling, ``a_k = Σ_i M[k, i] t_f**(order_i - k) b_i``: one small
+matrix product per segment for all joints at once.
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ _CUBIC_MATRIX = np.array([
     [2.0, 1.0, -2.0, 1.0],
 ])
 _CUBIC_ORDERS = np.array([0, 1, 0, 1])
+_CUBIC_EXPONENTS = _CUBIC_ORDERS[None, :] - np.arange(4)[:, None]
 
 # Quintic eq. (3) with t_f = 1; columns are (θ0, θ̇0, θ̈0, θf, θ̇f, θ̈f), rows a0…a5.
 _QUINTIC_MATRIX = np.array([
@@ -38,6 +39,7 @@ _QUINTIC_MATRIX = np.array([
     [-6.0, -3.0, -0.5, 6.0, -3.0, 0.5],
 ])
 _QUINTIC_ORDERS = np.array([0, 1, 2, 0, 1, 2])
+_QUINTIC_EXPONENTS = _QUINTIC_ORDERS[None, :] - np.arange(6)[:, None]
 
 # Above this many unknown via velocities the dense solve gives way to the O(n) sweep.
 _DENSE_SOLVE_LIMIT = 128
@@ -53,7 +55,7 @@ def cubic(
     """
     conditions = validation.per_joint_rows(q0=q0, v0=v0, qf=qf, vf=vf)
     duration = validation.duration_of(duration)
-    return _segments(_CUBIC_MATRIX, _CUBIC_ORDERS, conditions[:, None, :], np.array([duration]))
+    return _segments(_CUBIC_MATRIX, _CUBIC_EXPONENTS, conditions[None], np.array([duration]))
 
 
 def quintic(
@@ -72,9 +74,7 @@ def quintic(
     """
     conditions = validation.per_joint_rows(q0=q0, v0=v0, a0=a0, qf=qf, vf=vf, af=af)
     duration = validation.duration_of(duration)
-    return _segments(
-        _QUINTIC_MATRIX, _QUINTIC_ORDERS, conditions[:, None, :], np.array([duration])
-    )
+    return _segments(_QUINTIC_MATRIX, _QUINTIC_EXPONENTS, conditions[None], np.array([duration]))
 
 
 def cubic_via(
@@ -97,8 +97,9 @@ def cubic_via(
 
     """
     path, durations, point_velocities = _via_inputs(points, durations, velocities, v0)
-    boundary = np.stack([path[:-1], point_velocities[:-1], path[1:], point_velocities[1:]])
-    return _segments(_CUBIC_MATRIX, _CUBIC_ORDERS, boundary, durations)
+    boundary = np.stack(
+        [path[:-1], point_velocities[:-1], path[1:], point_velocities[1:]], axis=1)
+    return _segments(_CUBIC_MATRIX, _CUBIC_EXPONENTS, boundary, durations)
 
 
 def quintic_via(
@@ -126,8 +127,8 @@ def quintic_via(
     boundary = np.stack([
         path[:-1], point_velocities[:-1], point_accelerations[:-1],
         path[1:], point_velocities[1:], point_accelerations[1:],
-    ])
-    return _segments(_QUINTIC_MATRIX, _QUINTIC_ORDERS, boundary, durations)
+    ], axis=1)
+    return _segments(_QUINTIC_MATRIX, _QUINTIC_EXPONENTS, boundary, durations)
 
 
 def heuristic_velocities(
@@ -225,18 +226,15 @@ def _mean_cubic_accelerations(
 
 
 def _segments(
-    matrix: np.ndarray, orders: np.ndarray, boundary: np.ndarray, durations: np.ndarray
+    matrix: np.ndarray, exponents: np.ndarray, boundary: np.ndarray, durations: np.ndarray
 ) -> Trajectory:
     """
-    Coefficients of one polynomial per segment from its boundary conditions.
+    Solve one polynomial per segment from its boundary conditions.
 
-    ``boundary`` is ``(conditions, segments, joints)`` in the matrix's column order;
-    ``orders`` gives each condition's derivative order, for the ``t_f**order`` scaling.
+    ``boundary`` is ``(segments, conditions, joints)`` in the matrix's column order and
+    ``exponents[k, i] = order_i - k`` undoes the normalised-time scaling.
     """
-    count = matrix.shape[0]
-    scale = durations[None, :, None] ** orders[:, None, None]
-    normalised = matrix @ (boundary * scale).reshape(count, -1)
-    powers = durations[None, :, None] ** np.arange(count)[:, None, None]
-    coefficients = (normalised.reshape(boundary.shape) / powers).transpose(1, 0, 2)
-    breakpoints = np.concatenate(([0.0], np.cumsum(durations)))
-    return Trajectory(breakpoints, np.ascontiguousarray(coefficients))
+    per_segment = matrix * durations[:, None, None] ** exponents
+    breakpoints = np.zeros(len(durations) + 1)
+    np.cumsum(durations, out=breakpoints[1:])
+    return Trajectory(breakpoints, per_segment @ boundary)

@@ -21,7 +21,7 @@ from collections.abc import Callable
 import numpy as np
 
 from traj_gen_ros import validation
-from traj_gen_ros.blends import lspb, lspb_via
+from traj_gen_ros.blends import lspb, lspb_via, three_pieces
 from traj_gen_ros.polynomial import cubic, cubic_via, quintic, quintic_via
 from traj_gen_ros.trajectory import Trajectory
 from traj_gen_ros.validation import ArrayLike
@@ -56,8 +56,8 @@ def min_time(
     :param a0: start acceleration (rad/s²), used by the quintic only.
 
     For LSPB from rest every other joint runs its own optimal trapezoid stretched in time
-    to the common duration (acceleration scaled by ``(T_joint/T)²``), so none exceeds a
-    limit and all arrive together. A motion of zero length gives a zero-duration
+    to the common duration (acceleration scaled by ``(T_joint/T)²``, velocity by
+    ``T_joint/T``), so none exceeds a limit and all arrive together. A motion of zero length gives a zero-duration
     trajectory that holds ``q0``.
 
     """
@@ -69,21 +69,45 @@ def min_time(
         'max_acceleration', max_acceleration, joint_count)
     if profile not in PROFILES:
         raise ValueError(f'profile must be one of {", ".join(PROFILES)}, got "{profile}"')
-    if np.any(start_velocity) or np.any(start_acceleration):
+    if start_velocity.any() or start_acceleration.any():
         return _moving_min_time(
             start, goal, max_velocity, max_acceleration, profile, start_velocity,
             start_acceleration)
     distance = np.abs(goal - start)
+    if profile == 'lspb':
+        return _min_time_lspb(start, goal, distance, max_velocity, max_acceleration)
     joint_times = rest_to_rest_times(distance, max_velocity, max_acceleration, profile)
     duration = float(joint_times.max())
     if duration == 0.0:
         return hold(start)
-    if profile == 'cubic':
-        return cubic(start, goal, duration)
-    if profile == 'quintic':
-        return quintic(start, goal, duration)
-    stretch = np.where(joint_times > 0.0, (joint_times / duration) ** 2, 1.0)
-    return lspb(start, goal, duration, max_acceleration * stretch)
+    return (cubic if profile == 'cubic' else quintic)(start, goal, duration)
+
+
+def _min_time_lspb(
+    start: np.ndarray,
+    goal: np.ndarray,
+    distance: np.ndarray,
+    max_velocity: np.ndarray,
+    max_acceleration: np.ndarray,
+) -> Trajectory:
+    """
+    Plan every joint's time-optimal trapezoid, stretched to the slowest joint's duration.
+
+    Peak velocity ``v_p = min(v_max, sqrt(D a_max))`` (the triangle when ``v_max`` is not
+    reached), duration ``T_j = D/v_p + v_p/a_max``, blend time ``v_p/a_max``. Stretching
+    by ``k = T/T_j`` gives blend ``k v_p/a_max``, cruise ``v_p/k``, acceleration ``a_max/k²``.
+    """
+    peak = np.minimum(max_velocity, np.sqrt(distance * max_acceleration))
+    moving = peak > 0.0
+    joint_times = distance / np.where(moving, peak, 1.0) + peak / max_acceleration
+    duration = float(joint_times.max())
+    if duration == 0.0:
+        return hold(start)
+    stretch = duration / np.where(moving, joint_times, duration)
+    blend = stretch * peak / max_acceleration
+    return three_pieces(start, goal, duration, (blend, blend),
+                        np.sign(goal - start) * peak / stretch, np.zeros_like(start),
+                        max_acceleration / stretch**2)
 
 
 def rest_to_rest_times(
@@ -91,10 +115,8 @@ def rest_to_rest_times(
 ) -> np.ndarray:
     """Each joint's own shortest rest-to-rest duration (s) for ``distance`` (rad)."""
     if profile == 'lspb':
-        cruising = distance >= max_velocity**2 / max_acceleration
-        trapezoid = distance / max_velocity + max_velocity / max_acceleration
-        triangle = 2.0 * np.sqrt(distance / max_acceleration)
-        return np.where(cruising, trapezoid, triangle)
+        peak = np.minimum(max_velocity, np.sqrt(distance * max_acceleration))
+        return distance / np.where(peak > 0.0, peak, 1.0) + peak / max_acceleration
     velocity_peak, acceleration_peak = _POLYNOMIAL_PEAKS[profile]
     return np.maximum(velocity_peak * distance / max_velocity,
                       np.sqrt(acceleration_peak * distance / max_acceleration))

@@ -33,7 +33,8 @@ class Trajectory:
     def __init__(self, breakpoints: np.ndarray, coefficients: np.ndarray) -> None:
         self.breakpoints = breakpoints
         self.coefficients = coefficients
-        self.duration = float(np.max(breakpoints[-1]))
+        # Per-joint breakpoints all end at the same total duration.
+        self.duration = float(breakpoints[-1] if breakpoints.ndim == 1 else breakpoints[-1, 0])
         self.joint_count = int(coefficients.shape[2])
 
     @property

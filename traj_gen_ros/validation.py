@@ -52,6 +52,8 @@ def joint_count_of(**values: np.ndarray) -> int:
 
 def duration_of(value: float, name: str = 'duration') -> float:
     """Return ``value`` as a finite, strictly positive duration in seconds."""
+    if isinstance(value, int | float) and 0.0 < value < np.inf:
+        return float(value)
     array = finite_array(name, value, max_ndim=0)
     if array <= 0.0:
         raise ValueError(f'{name} must be > 0 s, got {float(array)}')
@@ -60,11 +62,17 @@ def duration_of(value: float, name: str = 'duration') -> float:
 
 def positive_per_joint(name: str, value: ArrayLike, joint_count: int) -> np.ndarray:
     """Return a per-joint limit (one for all, or one per joint), finite and > 0: ``(joints,)``."""
-    array = finite_array(name, value, max_ndim=1)
-    if array.ndim == 1 and array.size != joint_count:
+    if not isinstance(value, int | float):
+        array = finite_array(name, value, max_ndim=1)
+        if array.ndim == 0:
+            value = float(array)
+    if isinstance(value, int | float):
+        if not 0.0 < value < np.inf:
+            raise ValueError(f'{name} must be finite and > 0, got {value}')
+        return np.full(joint_count, float(value))
+    if array.size != joint_count:
         raise ValueError(f'{name} has {array.size} values for {joint_count} joints; '
                          'give one value, or one per joint')
-    array = np.broadcast_to(array, (joint_count,)).astype(float)
     bad = np.flatnonzero(array <= 0.0)
     if bad.size:
         raise ValueError(f'{name} must be > 0; joint {bad[0]} has {array[bad[0]]}')
@@ -110,31 +118,37 @@ def per_point(name: str, value: ArrayLike, shape: tuple[int, int]) -> np.ndarray
 
 def per_joint_rows(like: np.ndarray | None = None, **values: ArrayLike) -> np.ndarray:
     """
-    Scalars or per-joint 1-D arrays stacked as rows, ``(len(values), joints)``.
+    Stack scalars or per-joint 1-D arrays as rows, ``(len(values), joints)``.
 
     The joint count is the one the 1-D arrays agree on (or ``like.size``); scalars apply
     to every joint. One finiteness check covers all rows; a failure names the argument.
     """
-    arrays = {}
-    for name, value in values.items():
-        try:
-            array = np.asarray(value, dtype=float)
-        except (TypeError, ValueError) as error:
-            raise ValueError(f'{name} must be numbers: {error}') from None
+    try:
+        arrays = [value if isinstance(value, float) else np.asarray(value, dtype=float)
+                  for value in values.values()]
+    except (TypeError, ValueError):
+        arrays = [finite_array(name, value, max_ndim=1) for name, value in values.items()]
+    sizes = {array.size for array in arrays if not isinstance(array, float) and array.ndim}
+    if like is not None:
+        sizes.add(like.size)
+    if len(sizes) > 1 or 0 in sizes or any(np.ndim(array) > 1 for array in arrays):
+        _explain_rows(like, {name: np.asarray(array) for name, array in zip(values, arrays,
+                                                                          strict=True)})
+    rows = np.empty((len(arrays), sizes.pop() if sizes else 1))
+    for row, array in enumerate(arrays):
+        rows[row] = array
+    if not np.isfinite(rows).all():
+        for name, array in zip(values, arrays, strict=True):
+            finite_array(name, array, max_ndim=1)
+    return rows
+
+
+def _explain_rows(like: np.ndarray | None, arrays: dict[str, np.ndarray]) -> None:
+    """Raise the ``ValueError`` that says why per-joint arrays cannot be stacked."""
+    for name, array in arrays.items():
         if array.ndim > 1:
             raise ValueError(f'{name} must be a scalar or one value per joint, '
                              f'got shape {array.shape}')
-        arrays[name] = array
     if like is not None:
-        arrays_and_like = dict(arrays, points=np.asarray(like).reshape(-1))
-        count = joint_count_of(**arrays_and_like)
-    else:
-        count = joint_count_of(**arrays)
-    rows = np.empty((len(arrays), count))
-    for row, array in enumerate(arrays.values()):
-        rows[row] = array
-    if not np.isfinite(rows).all():
-        for name, array in arrays.items():
-            if not np.isfinite(array).all():
-                raise ValueError(f'{name} must be finite: {_describe_bad(np.atleast_1d(array))}')
-    return rows
+        arrays = dict(arrays, points=np.asarray(like).reshape(-1))
+    joint_count_of(**arrays)
