@@ -4,6 +4,7 @@ Importing this module isolates the test process: its own ROS_DOMAIN_ID (from the
 and discovery limited to localhost; the node subprocesses inherit the same environment.
 """
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -243,3 +244,25 @@ class Probe(Node):
         """Set parameters and assert they were accepted."""
         results = self.set_parameters(**values)
         assert all(r.successful for r in results), [r.reason for r in results]
+
+
+@contextlib.contextmanager
+def generator_session(*ros_args: str, generator: str = '/trajectory_generator',
+                      joint_states: str = '/joint_states'):
+    """Run a generator subprocess and a ready Probe; on exit check a clean shutdown."""
+    rclpy.init()
+    node = NodeProcess(*ros_args)
+    probe = None
+    try:
+        probe = Probe(generator, joint_states)
+        probe.wait_ready()
+        yield probe
+    finally:
+        if probe is not None:
+            probe.destroy_node()
+        rclpy.shutdown()
+        code = node.stop()
+        output = node.output()
+        node.close()
+    assert code == 0, output
+    assert 'Traceback' not in output, output

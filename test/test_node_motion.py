@@ -8,8 +8,7 @@ from node_harness import (
     JOINTS,
     MAX_ACCELERATION,
     MAX_VELOCITY,
-    NodeProcess,
-    Probe,
+    generator_session,
     stamp_ns,
     trajectory_arrays,
     via_message,
@@ -23,22 +22,8 @@ RATE = 100.0
 
 @pytest.fixture(scope='module')
 def probe():
-    rclpy.init()
-    node = NodeProcess()
-    probe = None
-    try:
-        probe = Probe()
-        probe.wait_ready()
+    with generator_session() as probe:
         yield probe
-    finally:
-        if probe is not None:
-            probe.destroy_node()
-        rclpy.shutdown()
-        code = node.stop()
-        output = node.output()
-        node.close()
-    assert code == 0, output
-    assert 'Traceback' not in output, output
 
 
 @pytest.fixture

@@ -5,30 +5,21 @@ import re
 
 import numpy as np
 import pytest
-import rclpy
 from diagnostic_msgs.msg import DiagnosticStatus
-from node_harness import JOINTS, NodeProcess, Probe, stamp_ns, trajectory_arrays, via_message
+from node_harness import (
+    JOINTS,
+    generator_session,
+    stamp_ns,
+    trajectory_arrays,
+    via_message,
+)
 from sensor_msgs.msg import JointState
 
 
 @pytest.fixture(scope='module')
 def probe():
-    rclpy.init()
-    node = NodeProcess()
-    probe = None
-    try:
-        probe = Probe()
-        probe.wait_ready()
+    with generator_session() as probe:
         yield probe
-    finally:
-        if probe is not None:
-            probe.destroy_node()
-        rclpy.shutdown()
-        code = node.stop()
-        output = node.output()
-        node.close()
-    assert code == 0, output
-    assert 'Traceback' not in output, output
 
 
 def goal(names, positions):
