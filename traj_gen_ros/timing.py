@@ -57,8 +57,8 @@ def min_time(
 
     For LSPB from rest every other joint runs its own optimal trapezoid stretched in time
     to the common duration (acceleration scaled by ``(T_joint/T)²``, velocity by
-    ``T_joint/T``), so none exceeds a limit and all arrive together. A motion of zero length gives a zero-duration
-    trajectory that holds ``q0``.
+    ``T_joint/T``), so none exceeds a limit and all arrive together. A motion of zero
+    length gives a zero-duration trajectory that holds ``q0``.
 
     """
     rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0, a0=a0)

@@ -132,8 +132,8 @@ def per_joint_rows(like: np.ndarray | None = None, **values: ArrayLike) -> np.nd
     if like is not None:
         sizes.add(like.size)
     if len(sizes) > 1 or 0 in sizes or any(np.ndim(array) > 1 for array in arrays):
-        _explain_rows(like, {name: np.asarray(array) for name, array in zip(values, arrays,
-                                                                          strict=True)})
+        named = zip(values, arrays, strict=True)
+        _explain_rows(like, {name: np.asarray(array) for name, array in named})
     rows = np.empty((len(arrays), sizes.pop() if sizes else 1))
     for row, array in enumerate(arrays):
         rows[row] = array
