@@ -129,7 +129,8 @@ class Probe(Node):
     """A second node that drives the generator and records what it publishes."""
 
     def __init__(self, generator: str = '/trajectory_generator',
-                 joint_states: str = '/joint_states', name: str = 'probe'):
+                 joint_states: str = '/joint_states', name: str = 'probe',
+                 goal: str | None = None):
         super().__init__(f'{name}_{os.getpid()}')
         reliable = ReliabilityPolicy.RELIABLE
         self.generator = generator
@@ -145,7 +146,7 @@ class Probe(Node):
                        durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self.create_subscription(DiagnosticStatus, f'{generator}/status', self.statuses.append,
                                  QoSProfile(depth=100, reliability=reliable))
-        self.goal_pub = self.create_publisher(JointState, f'{generator}/goal', 10)
+        self.goal_pub = self.create_publisher(JointState, goal or f'{generator}/goal', 10)
         self.via_pub = self.create_publisher(JointTrajectory, f'{generator}/via_points', 10)
         self.stop_client = self.create_client(Trigger, f'{generator}/stop')
         self.param_client = self.create_client(SetParameters, f'{generator}/set_parameters')
@@ -248,13 +249,13 @@ class Probe(Node):
 
 @contextlib.contextmanager
 def generator_session(*ros_args: str, generator: str = '/trajectory_generator',
-                      joint_states: str = '/joint_states'):
+                      joint_states: str = '/joint_states', goal: str | None = None):
     """Run a generator subprocess and a ready Probe; on exit check a clean shutdown."""
     rclpy.init()
     node = NodeProcess(*ros_args)
     probe = None
     try:
-        probe = Probe(generator, joint_states)
+        probe = Probe(generator, joint_states, goal=goal)
         probe.wait_ready()
         yield probe
     finally:
