@@ -19,7 +19,7 @@ setup(
     zip_safe=True,
     maintainer='traj_gen_ros maintainers',
     maintainer_email='maintainers@traj-gen-ros.org',
-    description="Craig ch. 7 joint trajectories (cubic, quintic, via points, LSPB) and a ROS 2 node",
+    description='Craig ch. 7 joint trajectories (cubic, quintic, via points, LSPB), ROS 2 node',
     license='Apache-2.0',
     tests_require=['pytest'],
     entry_points={

@@ -1,4 +1,5 @@
-"""Test harness: run the generator as a subprocess and talk to it over DDS.
+"""
+Test harness: run the generator as a subprocess and talk to it over DDS.
 
 Importing this module isolates the test process: its own ROS_DOMAIN_ID (from the pid)
 and discovery limited to localhost; the node subprocesses inherit the same environment.
@@ -101,7 +102,7 @@ def seconds(duration: Duration) -> float:
 
 
 def trajectory_arrays(message: JointTrajectory):
-    """Times, positions, velocities, accelerations of a JointTrajectory as arrays."""
+    """Return times, positions, velocities, accelerations of a JointTrajectory as arrays."""
     times = np.array([seconds(p.time_from_start) for p in message.points])
     positions = np.array([p.positions for p in message.points])
     velocities = np.array([p.velocities for p in message.points])
@@ -110,7 +111,7 @@ def trajectory_arrays(message: JointTrajectory):
 
 
 def via_message(names, points, stamp=None) -> JointTrajectory:
-    """A JointTrajectory from ``[(positions, time, velocities?, accelerations?), ...]``."""
+    """Build a JointTrajectory from ``[(positions, time, velocities?, accel?), ...]``."""
     message = JointTrajectory(joint_names=list(names))
     if stamp is not None:
         message.header.stamp = stamp

@@ -50,7 +50,7 @@ class Plan(Protocol):
 
     @property
     def joint_count(self) -> int:
-        """Number of joints."""
+        """Return the number of joints."""
 
     def sample(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Positions, velocities, accelerations at ``times``, each ``(len(times), joints)``."""
@@ -643,5 +643,5 @@ class Schedule:
 
     @property
     def pending(self) -> int:
-        """Number of plans in the schedule (the running one and delayed ones)."""
+        """Return the number of plans kept (the running one and delayed ones)."""
         return len(self._segments)

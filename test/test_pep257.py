@@ -1,0 +1,15 @@
+"""ament_pep257 docstring conventions over the package, as the ROS 2 templates do."""
+
+from pathlib import Path
+
+import pytest
+from ament_pep257.main import main
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.linter
+@pytest.mark.pep257
+def test_pep257():
+    rc = main(argv=[str(REPO / 'traj_gen_ros'), str(REPO / 'test')])
+    assert rc == 0, 'Found code style errors / warnings'
