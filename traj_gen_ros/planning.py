@@ -421,8 +421,12 @@ def plan_goal(config: Config, state: State, hold: np.ndarray,
                         config.profile_acceleration, profile=config.profile,
                         v0=velocity_0, a0=acceleration_0)
     except ValueError as error:
-        raise RequestError(f'cannot plan the goal with profile {config.profile}: {error}') \
-            from None
+        moving = '' if not np.any(velocity_0) else (
+            f' from the current motion (velocity {np.round(velocity_0, 4).tolist()} rad/s, '
+            f'acceleration {np.round(acceleration_0, 4).tolist()} rad/s^2); resend it when '
+            'the motion has slowed, or call ~/stop first')
+        raise RequestError(f'cannot plan the goal with profile {config.profile}{moving}: '
+                           f'{error}') from None
     violation = limit_violation(plan, config, config.profile_acceleration)
     if violation:
         raise RequestError(f'the minimum-time plan breaks a limit: {violation}')

@@ -1,0 +1,180 @@
+"""ROS-free request handling: parameter checks, request parsing, plans, schedule."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from traj_gen_ros import min_time
+from traj_gen_ros.planning import (
+    GoalRequest,
+    Hold,
+    PlannedMotion,
+    RequestError,
+    Schedule,
+    State,
+    make_config,
+    parse_goal,
+    parse_via,
+    plan_goal,
+    plan_stop,
+    plan_via,
+    sample_grid,
+    sample_motion,
+    split_nanoseconds,
+    via_points,
+)
+
+JOINTS = ['a', 'b', 'c']
+
+
+def config(**changes):
+    values = dict(joints=JOINTS, rate_hz=100.0, profile='quintic', via_velocities='heuristic',
+                  max_velocity=[1.0, 2.0, 3.0], max_acceleration=4.0, lspb_acceleration=0.0)
+    values.update(changes)
+    return make_config(**values)
+
+
+def rest(position=(0.0, 0.0, 0.0)):
+    position = np.array(position, dtype=float)
+    return State(position, np.zeros(3), np.zeros(3))
+
+
+def test_config_broadcasts_and_replaces_zero_lspb_acceleration():
+    cfg = config(lspb_acceleration=[0.0, 1.0, 0.0])
+    assert cfg.max_acceleration.tolist() == [4.0, 4.0, 4.0]
+    assert cfg.lspb_acceleration.tolist() == [4.0, 1.0, 4.0]
+    assert cfg.profile_acceleration.tolist() == [4.0, 4.0, 4.0]
+    assert config(profile='lspb', lspb_acceleration=2).profile_acceleration.tolist() == [2.0] * 3
+
+
+@pytest.mark.parametrize('changes, reason', [
+    ({'joints': []}, 'joints is empty'),
+    ({'joints': ['a', 'a']}, r"joints lists \['a'\] more than once"),
+    ({'rate_hz': True}, 'rate_hz must be a number'),
+    ({'max_velocity': [1.0, math.nan, 1.0]}, r'max_velocity\[1\] = nan'),
+    ({'max_acceleration': [1.0, 2.0]}, 'has 2 values but there are 3 joints'),
+    ({'lspb_acceleration': -1.0}, 'must be finite and non-negative'),
+])
+def test_config_errors_name_the_parameter(changes, reason):
+    with pytest.raises(ValueError, match=reason):
+        config(**changes)
+
+
+def test_parse_goal_and_via_errors():
+    assert parse_goal(JOINTS, ['c', 'a'], [1.0, 2.0]).joints.tolist() == [2, 0]
+    with pytest.raises(RequestError, match="unknown joint 'x'; known joints"):
+        parse_goal(JOINTS, ['x'], [1.0])
+    with pytest.raises(RequestError, match='strictly increasing: point 2'):
+        parse_via(JOINTS, ['a'], [([0.1], [], [], 1.0), ([0.2], [], [], 2.0),
+                                  ([0.3], [], [], 2.0)])
+    with pytest.raises(RequestError, match='point 0 has time_from_start -1.0 s'):
+        parse_via(JOINTS, ['a'], [([0.1], [], [], -1.0)])
+    with pytest.raises(RequestError, match='accelerations are given without velocities'):
+        parse_via(JOINTS, ['a'], [([0.1], [], [0.0], 1.0)])
+    assert parse_via(JOINTS, ['a'], [([0.1], [], [], 0.0), ([0.2], [], [], 0.0)]).auto_timed
+
+
+def test_via_points_rules():
+    state = State(np.array([0.0, 1.0, 2.0]), np.array([0.5, 0, 0]), np.zeros(3))
+    hold = np.array([9.0, 1.0, 2.0])
+    # time > 0: the setpoint is prepended; unnamed joints go to ``hold``.
+    request = parse_via(JOINTS, ['b'], [([1.5], [], [], 1.0)])
+    points, times, _, _ = via_points(JOINTS, state, hold, request)
+    assert points.tolist() == [[0.0, 1.0, 2.0], [9.0, 1.5, 2.0]] and times.tolist() == [0, 1]
+    # time 0 at the current position: it is the start.
+    request = parse_via(JOINTS, ['b'], [([1.0], [], [], 0.0), ([1.5], [], [], 1.0)])
+    points, times, _, _ = via_points(JOINTS, state, hold, request)
+    assert len(points) == 2 and times.tolist() == [0, 1]
+    # time 0 elsewhere: refused, naming the joint.
+    request = parse_via(JOINTS, ['b'], [([1.2], [], [], 0.0), ([1.5], [], [], 1.0)])
+    with pytest.raises(RequestError, match="joint 'b' is at 1 rad, not 1.2"):
+        via_points(JOINTS, state, hold, request)
+
+
+def test_goal_plan_matches_core_min_time_and_holds_unnamed_joints():
+    cfg = config()
+    motion = plan_goal(cfg, rest(), np.array([0.0, 0.5, 0.0]), GoalRequest(np.array([0]),
+                                                                              np.array([1.0])))
+    expected = min_time([0, 0, 0], [1.0, 0.5, 0.0], cfg.max_velocity, cfg.max_acceleration,
+                        profile='quintic')
+    assert motion.plan.duration == pytest.approx(expected.duration)
+    assert motion.end.tolist() == [1.0, 0.5, 0.0]
+    times, q, v, a = sample_motion(motion, cfg.rate_hz)
+    assert times[-1] == motion.plan.duration and q[-1].tolist() == [1.0, 0.5, 0.0]
+    assert not v[-1].any() and not a[-1].any()
+
+
+def test_explicit_times_too_short_report_a_feasible_minimum():
+    cfg = config(profile='cubic')
+    request = parse_via(JOINTS, ['a'], [([1.0], [], [], 0.5)])
+    with pytest.raises(RequestError, match='minimum feasible duration is ([0-9.]+) s') as info:
+        plan_via(cfg, rest(), np.zeros(3), request)
+    minimum = float(str(info.value).split('duration is ')[1].split(' s')[0])
+    # cubic rest to rest: peak velocity 1.5 h / T binds (1 rad/s): T = 1.5 s.
+    assert minimum == pytest.approx(1.5, rel=1e-3)
+
+
+def test_auto_timing_stretches_when_the_start_state_needs_it():
+    cfg = config()
+    moving = State(np.zeros(3), np.array([0.9, 0, 0]), np.zeros(3))
+    request = parse_via(JOINTS, ['a'], [([-0.05], [], [], 0.0)])
+    motion = plan_via(cfg, moving, np.zeros(3), request)
+    _, v, a = motion.plan.sample(np.linspace(0, motion.plan.duration, 2001))
+    assert np.all(np.abs(v) <= cfg.max_velocity * (1 + 1e-6))
+    assert np.all(np.abs(a) <= cfg.max_acceleration * (1 + 1e-6))
+
+
+def test_stop_brakes_at_the_limit_to_rest():
+    cfg = config()
+    state = State(np.array([0.0, 1.0, 2.0]), np.array([2.0, -1.0, 0.0]), np.ones(3))
+    motion = plan_stop(cfg, state)
+    assert motion.plan.duration == pytest.approx(0.5)
+    assert motion.end == pytest.approx([0.0 + 2.0**2 / 8, 1.0 - 1.0 / 8, 2.0])
+    q, v, a = motion.plan.sample(np.array([0.0, 0.25, 0.5, 1.0]))
+    assert q[0].tolist() == [0.0, 1.0, 2.0] and v[0].tolist() == [2.0, -1.0, 0.0]
+    assert np.all(np.abs(a) <= 4.0) and not v[-1].any()
+
+
+def test_sample_grid_and_nanoseconds():
+    times = sample_grid(Hold([0.0]), 100.0)
+    assert times.tolist() == [0.0]
+    plan = min_time(0.0, 0.3, 1.0, 4.0, profile='quintic')
+    times = sample_grid(plan, 100.0)
+    assert times[-1] == plan.duration and np.allclose(np.diff(times)[:-1], 0.01)
+    assert split_nanoseconds(np.array([1.25, 0.01])) == ([1, 0], [250_000_000, 10_000_000])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.floats(0.05, 0.6), st.floats(-1.0, 1.0),
+                          st.sampled_from(['cubic', 'quintic', 'lspb'])),
+                min_size=1, max_size=4))
+def test_preemption_keeps_position_and_velocity_continuous(requests):
+    """Accepted replans start at the setpoint; a refusal is a RequestError, never a crash."""
+    schedule = Schedule(PlannedMotion(Hold(np.zeros(3)), 'hold', np.zeros(3)))
+    now = 0
+    last = np.zeros(3)
+    for number, (delay, target, profile) in enumerate(requests):
+        now += int(delay * 1e9)
+        before = schedule.state_at(now - 1)
+        cfg = config(profile=profile)
+        state = schedule.state_at(now)
+        try:
+            motion = plan_goal(cfg, state, schedule.end_position(now),
+                               GoalRequest(np.array([0, 2]), np.array([target, -target])))
+        except RequestError as error:
+            assert number > 0, error  # from rest every goal is feasible
+            assert 'from the current motion' in str(error)
+            continue
+        schedule.splice(now, motion, now)
+        last = motion.end
+        after = schedule.state_at(now)
+        assert np.allclose(after.position, before.position, atol=1e-6)
+        assert np.allclose(after.velocity, before.velocity, atol=1e-5)
+        if profile == 'quintic':
+            assert np.allclose(after.acceleration, state.acceleration, atol=1e-6)
+    end = schedule.state_at(now + 10**11)
+    assert end.position.tolist() == last.tolist()
+    assert not end.velocity.any()
