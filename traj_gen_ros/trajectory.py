@@ -10,10 +10,16 @@ Units: seconds for time, radians (or metres) for position.
 
 from __future__ import annotations
 
+import math
+from functools import cached_property
+
 import numpy as np
 
 _PEAK_SEED_SAMPLES = 17  # samples per segment that seed the Newton search for extrema
-_PEAK_NEWTON_STEPS = 6
+_PEAK_NEWTON_STEPS = 8
+# Samples per piece above which each piece is evaluated as one matrix product.
+_SAMPLES_PER_PIECE_FOR_MATMUL = 16
+_SAMPLES_PER_PRODUCT = 4096  # keeps each product's operands in cache
 
 
 class Trajectory:
@@ -49,42 +55,94 @@ class Trajectory:
 
     def sample(self, times: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """
-        Positions, velocities and accelerations at ``times`` (s), each ``(samples, joints)``.
+        Sample positions, velocities and accelerations at ``times`` (s).
 
-        Times before 0 or after ``duration`` return the boundary state at 0 or ``duration``.
-        Vectorised: one ``searchsorted`` and one Horner pass for all samples and joints.
+        Each result is ``(samples, joints)``. Times before 0 or after ``duration`` give the
+        boundary state at 0 or ``duration``. Vectorised, with no loop over samples: dense
+        sampling evaluates every piece's run of (sorted) samples as one matrix product
+        ``[1, τ, τ², …] @ coefficients``; sparse sampling gathers each sample's
+        coefficients and runs Horner's rule on all of them at once.
         """
         times = np.clip(np.asarray(times, dtype=float).reshape(-1), 0.0, self.duration)
-        coefficients, local_time = self._locate(times)
-        return _horner(coefficients, local_time, self.degree)
+        breakpoints, coefficients = self._shared_pieces
+        if times.size < _SAMPLES_PER_PIECE_FOR_MATMUL * len(coefficients):
+            piece = np.searchsorted(breakpoints[1:-1], times, side='right')
+            local_time = (times - breakpoints[piece])[:, None]
+            return _horner(coefficients[piece], local_time, self.degree)
+        order = None
+        if np.any(times[1:] < times[:-1]):
+            order = np.argsort(times, kind='stable')
+            times = times[order]
+        states = self._sample_sorted(times)
+        if order is not None:
+            unsorted = np.empty_like(states)
+            unsorted[:, order] = states
+            states = unsorted
+        return states[0], states[1], states[2]
 
     def peaks(self) -> tuple[np.ndarray, np.ndarray]:
         """
-        Largest ``|velocity|`` and ``|acceleration|`` over the whole motion, per joint.
+        Find the largest ``|velocity|`` and ``|acceleration|`` per joint, ``(joints,)`` each.
 
         Each piece is searched from a few seed samples, refined by Newton steps on the next
         derivative, so the values are exact extrema to rounding, not sampled estimates.
         """
-        velocity = _derivative(self.coefficients)
+        breakpoints, coefficients = self._shared_pieces
+        velocity = _derivative(coefficients)
         acceleration = _derivative(velocity)
-        durations = np.diff(self.breakpoints, axis=0)
-        if durations.ndim == 1:
-            durations = np.broadcast_to(durations[:, None], velocity[:, 0].shape)
+        durations = np.broadcast_to(np.diff(breakpoints)[:, None], velocity[:, 0].shape)
         return _peak_abs(velocity, durations), _peak_abs(acceleration, durations)
 
-    def _locate(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Coefficients ``(samples, n + 1, joints)`` and local times for each sample."""
-        if self.piece_count == 1:
-            return self.coefficients, times[:, None]
+    @cached_property
+    def _shared_pieces(self) -> tuple[np.ndarray, np.ndarray]:
+        """
+        Give breakpoints shared by every joint, ``(pieces + 1,)``, with coefficients on them.
+
+        Per-joint breakpoints (LSPB) are merged into their union, and each joint's
+        polynomial is re-expanded about the start of every union interval (Taylor shift:
+        ``c'_k = Σ_m C(m, k) c_m d^(m-k)``).
+        """
         if self.breakpoints.ndim == 1:
-            piece = np.searchsorted(self.breakpoints[1:-1], times, side='right')
-            return self.coefficients[piece], (times - self.breakpoints[piece])[:, None]
+            return self.breakpoints, self.coefficients
+        union = np.unique(self.breakpoints)
+        starts = union[:-1]
         joints = np.arange(self.joint_count)
-        piece = np.empty((times.size, self.joint_count), dtype=np.intp)
+        piece = np.empty((starts.size, self.joint_count), dtype=np.intp)
         for joint in joints:
-            piece[:, joint] = np.searchsorted(self.breakpoints[1:-1, joint], times, 'right')
-        coefficients = self.coefficients[piece, :, joints].transpose(0, 2, 1)
-        return coefficients, times[:, None] - self.breakpoints[piece, joints]
+            piece[:, joint] = np.searchsorted(self.breakpoints[1:-1, joint], starts, 'right')
+        offset = starts[:, None] - self.breakpoints[piece, joints]
+        source = self.coefficients[piece, :, joints].transpose(0, 2, 1)
+        shifted = np.zeros_like(source)
+        for power in range(self.degree + 1):
+            for higher in range(power, self.degree + 1):
+                shifted[:, power] += (math.comb(higher, power) * source[:, higher]
+                                      * offset ** (higher - power))
+        return union, shifted
+
+    @cached_property
+    def _state_tables(self) -> np.ndarray:
+        """Position, velocity, acceleration coefficients, ``(pieces, 3, n + 1, joints)``."""
+        coefficients = self._shared_pieces[1]
+        tables = np.zeros((len(coefficients), 3) + coefficients.shape[1:])
+        derivative = coefficients
+        for order in range(3):
+            tables[:, order, :derivative.shape[1]] = derivative
+            derivative = _derivative(derivative)
+        return tables
+
+    def _sample_sorted(self, times: np.ndarray) -> np.ndarray:
+        """Evaluate ascending ``times`` piece by piece: ``(3, samples, joints)``."""
+        breakpoints = self._shared_pieces[0]
+        states = np.empty((3, times.size, self.joint_count))
+        edges = np.searchsorted(times, breakpoints, side='left')
+        edges[0], edges[-1] = 0, times.size
+        for piece in np.flatnonzero(edges[1:] > edges[:-1]):
+            table = self._state_tables[piece]
+            for first in range(edges[piece], edges[piece + 1], _SAMPLES_PER_PRODUCT):
+                run = slice(first, min(first + _SAMPLES_PER_PRODUCT, edges[piece + 1]))
+                local_time = times[run] - breakpoints[piece]
+                states[:, run] = np.vander(local_time, self.degree + 1, True) @ table
+        return states
 
 
 def _horner(
@@ -126,21 +184,27 @@ def _polyval(coefficients: np.ndarray, local_time: np.ndarray) -> np.ndarray:
 
 
 def _peak_abs(coefficients: np.ndarray, durations: np.ndarray) -> np.ndarray:
-    """Exact largest ``|p(t)|`` over every piece, per joint: ``(joints,)``."""
+    """
+    Find the exact largest ``|p(t)|`` over every piece, per joint: ``(joints,)``.
+
+    Every extremum lies at a piece end or where ``p'`` vanishes. Newton steps on ``p'`` from
+    evenly spaced seeds reach each interior root (a polynomial of degree ≤ 4 has at most
+    three); the ends and the seeds themselves stay candidates.
+    """
     if coefficients.shape[1] == 0:
         return np.zeros(coefficients.shape[2])
     fractions = np.linspace(0.0, 1.0, _PEAK_SEED_SAMPLES)[None, :, None]
-    seeds = fractions * durations[:, None, :]
-    values = np.abs(_polyval(coefficients, seeds))
-    best = np.take_along_axis(seeds, values.argmax(axis=1)[:, None, :], axis=1)
+    upper = durations[:, None, :]
+    seeds = fractions * upper
+    largest = np.abs(_polyval(coefficients, seeds)).max(axis=(0, 1))
     slope = _derivative(coefficients)
-    if slope.shape[1] >= 2:
-        curvature = _derivative(slope)
-        upper = durations[:, None, :]
-        for _ in range(_PEAK_NEWTON_STEPS):
-            second = _polyval(curvature, best)
-            safe = np.where(second == 0.0, 1.0, second)
-            step = np.where(second == 0.0, 0.0, _polyval(slope, best) / safe)
-            best = np.clip(best - step, 0.0, upper)
-    refined = np.abs(_polyval(coefficients, best))[:, 0, :]
-    return np.maximum(values.max(axis=1), refined).max(axis=0)
+    if slope.shape[1] < 2:
+        return largest
+    curvature = _derivative(slope)
+    refined = seeds
+    for _ in range(_PEAK_NEWTON_STEPS):
+        second = _polyval(curvature, refined)
+        safe = np.where(second == 0.0, 1.0, second)
+        step = np.where(second == 0.0, 0.0, _polyval(slope, refined) / safe)
+        refined = np.clip(refined - step, 0.0, upper)
+    return np.maximum(largest, np.abs(_polyval(coefficients, refined)).max(axis=(0, 1)))
