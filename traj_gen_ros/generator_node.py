@@ -20,6 +20,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable
 
+import numpy as np
 import rclpy
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
@@ -69,6 +70,8 @@ class TrajectoryGenerator(Node):
         start = planning.PlannedMotion(planning.Hold(initial), 'hold', initial)
         self._schedule = planning.Schedule(start)
         self._names = list(self._config.joints)
+        self._grid: list[Duration] = []
+        self._grid_rate = 0.0
         reliable = ReliabilityPolicy.RELIABLE
         self._joint_states = self.create_publisher(
             JointState, 'joint_states', QoSProfile(depth=10, reliability=reliable))
@@ -157,15 +160,26 @@ class TrajectoryGenerator(Node):
                             motion: planning.PlannedMotion) -> JointTrajectory:
         times, positions, velocities, accelerations = planning.sample_motion(
             motion, self._config.rate_hz)
-        seconds, nanoseconds = planning.split_nanoseconds(times)
         points = [
-            JointTrajectoryPoint(positions=p, velocities=v, accelerations=a,
-                                 time_from_start=Duration(sec=s, nanosec=n))
-            for p, v, a, s, n in zip(positions.tolist(), velocities.tolist(),
-                                     accelerations.tolist(), seconds, nanoseconds, strict=True)]
+            JointTrajectoryPoint(positions=p, velocities=v, accelerations=a, time_from_start=t)
+            for p, v, a, t in zip(positions.tolist(), velocities.tolist(),
+                                  accelerations.tolist(), self._durations(times), strict=True)]
         message = JointTrajectory(joint_names=self._names, points=points)
         message.header.stamp = Time(nanoseconds=start_ns).to_msg()
         return message
+
+    def _durations(self, times: np.ndarray) -> list[Duration]:
+        """Return ``time_from_start`` messages, reusing those of the regular grid."""
+        grid = planning.sample_grid_count(times, self._config.rate_hz)
+        if len(self._grid) < grid or self._grid_rate != self._config.rate_hz:
+            seconds, nanoseconds = planning.split_nanoseconds(
+                np.arange(max(grid, 2 * len(self._grid))) / self._config.rate_hz)
+            self._grid = [Duration(sec=s, nanosec=n)
+                          for s, n in zip(seconds, nanoseconds, strict=True)]
+            self._grid_rate = self._config.rate_hz
+        seconds, nanoseconds = planning.split_nanoseconds(times[grid:])
+        return self._grid[:grid] + [Duration(sec=s, nanosec=n)
+                                    for s, n in zip(seconds, nanoseconds, strict=True)]
 
     # ------------------------------------------------------------------ requests
 

@@ -356,6 +356,14 @@ def sample_grid(plan: Plan, rate_hz: float) -> np.ndarray:
     return times
 
 
+def sample_grid_count(times: np.ndarray, rate_hz: float) -> int:
+    """Return how many leading ``times`` are exactly the regular grid ``k / rate_hz``."""
+    count = len(times)
+    if count and times[-1] != (count - 1) / rate_hz:
+        count -= 1
+    return count
+
+
 def sample_motion(motion: PlannedMotion, rate_hz: float
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Sample a plan on :func:`sample_grid`; the last sample is exactly the end, at rest."""
@@ -375,24 +383,42 @@ def split_nanoseconds(times: np.ndarray) -> tuple[list[int], list[int]]:
 
 def limit_violation(plan: Plan, config: Config, acceleration: np.ndarray | None = None
                     ) -> str | None:
-    """Describe the first joint whose velocity/acceleration exceeds its limit, else None."""
+    """
+    Describe the first joint whose velocity/acceleration exceeds its limit, else None.
+
+    Uses the exact polynomial peaks of core trajectories (``peaks()``) when available and
+    dense sampling otherwise; a violation is located in time by sampling.
+    """
     if plan.duration <= 0.0:
         return None
+    a_limit = config.max_acceleration if acceleration is None else acceleration
+    peaks = getattr(plan, 'peaks', None)
+    if peaks is not None:
+        peak_velocity, peak_acceleration = peaks()
+        if np.all(peak_velocity <= config.max_velocity * (1.0 + LIMIT_TOLERANCE)) and \
+                np.all(peak_acceleration <= a_limit * (1.0 + LIMIT_TOLERANCE)):
+            return None
     count = max(2001, int(plan.duration * config.rate_hz * 8) + 1)
     times = np.linspace(0.0, plan.duration, count)
     _, velocity, accel = plan.sample(times)
-    a_limit = config.max_acceleration if acceleration is None else acceleration
     for what, values, limit, unit in (('velocity', velocity, config.max_velocity, 'rad/s'),
                                       ('acceleration', accel, a_limit, 'rad/s^2')):
-        excess = np.abs(values) - limit * (1.0 + LIMIT_TOLERANCE) - 1e-12
         if not np.isfinite(values).all():
             return f'the plan has a non-finite {what}'
+        excess = np.abs(values) - limit * (1.0 + LIMIT_TOLERANCE) - 1e-12
         if (excess > 0.0).any():
             row, joint = np.unravel_index(np.argmax(excess), excess.shape)
-            name = config.joints[joint]
-            limit_name = 'max_' + what
-            return (f'joint {name!r} would reach {what} {abs(values[row, joint]):.4g} {unit} '
-                    f'at t={times[row]:.3f} s, above {limit_name} {limit[joint]:.4g} {unit}')
+            return (f'joint {config.joints[joint]!r} would reach {what} '
+                    f'{abs(values[row, joint]):.4g} {unit} at t={times[row]:.3f} s, above '
+                    f'max_{what} {limit[joint]:.4g} {unit}')
+    if peaks is not None:  # a peak between samples
+        excess = np.concatenate([peak_velocity / config.max_velocity,
+                                 peak_acceleration / a_limit])
+        index = int(np.argmax(excess))
+        what = 'velocity' if index < len(config.joints) else 'acceleration'
+        joint = index % len(config.joints)
+        return (f'joint {config.joints[joint]!r} would exceed max_{what} by '
+                f'{(excess[index] - 1.0) * 100:.2g} %')
     return None
 
 
