@@ -98,8 +98,10 @@ def single_segment(
     else:
         first_blend = last_blend = _rest_start_blend_time(displacement, duration, acceleration)
         cruise = np.sign(displacement) * acceleration * first_blend
+    first_acceleration = np.sign(cruise - start_velocity) * acceleration
+    last_acceleration = -np.sign(cruise) * acceleration
     return three_pieces(start, goal, duration, (first_blend, last_blend), cruise,
-                        start_velocity, acceleration)
+                        start_velocity, (first_acceleration, last_acceleration))
 
 
 def three_pieces(
@@ -108,14 +110,14 @@ def three_pieces(
     duration: float,
     blend_times: tuple[np.ndarray, np.ndarray],
     cruise: np.ndarray,
-    start_velocity: np.ndarray,
-    acceleration: np.ndarray,
+    start_velocity: np.ndarray | float,
+    blend_accelerations: tuple[np.ndarray, np.ndarray],
 ) -> BlendedTrajectory:
     """
     Assemble blend, line, blend from their timing, all ``(joints,)`` arrays.
 
     The first blend takes ``start_velocity`` to ``cruise`` in ``blend_times[0]``, the last
-    takes ``cruise`` to rest in ``blend_times[1]``, both at ``acceleration`` (magnitude);
+    takes ``cruise`` to rest in ``blend_times[1]``, at the signed ``blend_accelerations``;
     the line ends at ``goal - cruise t_b/2``, so the goal is met exactly.
     """
     first_blend, last_blend = blend_times
@@ -124,11 +126,11 @@ def three_pieces(
     breakpoints[2], breakpoints[3] = duration - last_blend, duration
     coefficients = np.zeros((3, 3, start.size))
     coefficients[0, 0], coefficients[0, 1] = start, start_velocity
-    coefficients[0, 2] = 0.5 * np.sign(cruise - start_velocity) * acceleration
+    coefficients[0, 2] = 0.5 * blend_accelerations[0]
     coefficients[1, 0] = start + 0.5 * (start_velocity + cruise) * first_blend
     coefficients[1, 1] = coefficients[2, 1] = cruise
     coefficients[2, 0] = goal - 0.5 * cruise * last_blend
-    coefficients[2, 2] = -0.5 * np.sign(cruise) * acceleration
+    coefficients[2, 2] = 0.5 * blend_accelerations[1]
     return BlendedTrajectory(breakpoints, coefficients)
 
 

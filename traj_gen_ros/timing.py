@@ -99,15 +99,16 @@ def _min_time_lspb(
     """
     peak = np.minimum(max_velocity, np.sqrt(distance * max_acceleration))
     moving = peak > 0.0
-    joint_times = distance / np.where(moving, peak, 1.0) + peak / max_acceleration
+    ramp = peak / max_acceleration
+    joint_times = distance / np.where(moving, peak, 1.0) + ramp
     duration = float(joint_times.max())
     if duration == 0.0:
         return hold(start)
-    stretch = duration / np.where(moving, joint_times, duration)
-    blend = stretch * peak / max_acceleration
-    return three_pieces(start, goal, duration, (blend, blend),
-                        np.sign(goal - start) * peak / stretch, np.zeros_like(start),
-                        max_acceleration / stretch**2)
+    shrink = np.where(moving, joint_times, duration) / duration  # 1/k
+    blend = ramp / shrink
+    acceleration = np.sign(goal - start) * max_acceleration * shrink**2
+    return three_pieces(start, goal, duration, (blend, blend), acceleration * blend, 0.0,
+                        (acceleration, -acceleration))
 
 
 def rest_to_rest_times(

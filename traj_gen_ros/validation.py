@@ -62,20 +62,19 @@ def duration_of(value: float, name: str = 'duration') -> float:
 
 def positive_per_joint(name: str, value: ArrayLike, joint_count: int) -> np.ndarray:
     """Return a per-joint limit (one for all, or one per joint), finite and > 0: ``(joints,)``."""
-    if not isinstance(value, int | float):
-        array = finite_array(name, value, max_ndim=1)
-        if array.ndim == 0:
-            value = float(array)
     if isinstance(value, int | float):
         if not 0.0 < value < np.inf:
             raise ValueError(f'{name} must be finite and > 0, got {value}')
         return np.full(joint_count, float(value))
+    array = finite_array(name, value, max_ndim=1)
+    if array.ndim == 0:
+        return positive_per_joint(name, float(array), joint_count)
     if array.size != joint_count:
         raise ValueError(f'{name} has {array.size} values for {joint_count} joints; '
                          'give one value, or one per joint')
-    bad = np.flatnonzero(array <= 0.0)
-    if bad.size:
-        raise ValueError(f'{name} must be > 0; joint {bad[0]} has {array[bad[0]]}')
+    if not (array > 0.0).all():
+        joint = int(np.argmin(array > 0.0))
+        raise ValueError(f'{name} must be > 0; joint {joint} has {array[joint]}')
     return array
 
 
@@ -123,15 +122,18 @@ def per_joint_rows(like: np.ndarray | None = None, **values: ArrayLike) -> np.nd
     The joint count is the one the 1-D arrays agree on (or ``like.size``); scalars apply
     to every joint. One finiteness check covers all rows; a failure names the argument.
     """
-    try:
-        arrays = [value if isinstance(value, float) else np.asarray(value, dtype=float)
-                  for value in values.values()]
-    except (TypeError, ValueError):
-        arrays = [finite_array(name, value, max_ndim=1) for name, value in values.items()]
-    sizes = {array.size for array in arrays if not isinstance(array, float) and array.ndim}
-    if like is not None:
-        sizes.add(like.size)
-    if len(sizes) > 1 or 0 in sizes or any(np.ndim(array) > 1 for array in arrays):
+    arrays = []
+    sizes = set() if like is None else {like.size}
+    for name, value in values.items():
+        if not isinstance(value, float):
+            try:
+                value = np.asarray(value, dtype=float)
+            except (TypeError, ValueError) as error:
+                raise ValueError(f'{name} must be numbers: {error}') from None
+            if value.ndim:
+                sizes.add(value.shape[0] if value.ndim == 1 else -1)
+        arrays.append(value)
+    if len(sizes) > 1 or 0 in sizes or -1 in sizes:
         named = zip(values, arrays, strict=True)
         _explain_rows(like, {name: np.asarray(array) for name, array in named})
     rows = np.empty((len(arrays), sizes.pop() if sizes else 1))
