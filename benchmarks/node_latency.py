@@ -23,8 +23,8 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 # One isolated domain per run; the bare-timer child inherits the parent's choice.
-os.environ['ROS_DOMAIN_ID'] = os.environ.setdefault('NODE_LATENCY_DOMAIN',
-                                                   str(1 + os.getpid() % 100))
+DOMAIN = os.environ.setdefault('NODE_LATENCY_DOMAIN', str(1 + os.getpid() % 100))
+os.environ['ROS_DOMAIN_ID'] = DOMAIN
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 
 import numpy as np  # noqa: E402

@@ -96,8 +96,8 @@ def test_via_points_rules():
 
 def test_goal_plan_matches_core_min_time_and_holds_unnamed_joints():
     cfg = config()
-    motion = plan_goal(cfg, rest(), np.array([0.0, 0.5, 0.0]), GoalRequest(np.array([0]),
-                                                                              np.array([1.0])))
+    request = GoalRequest(np.array([0]), np.array([1.0]))
+    motion = plan_goal(cfg, rest(), np.array([0.0, 0.5, 0.0]), request)
     expected = min_time([0, 0, 0], [1.0, 0.5, 0.0], cfg.max_velocity, cfg.max_acceleration,
                         profile='quintic')
     assert motion.plan.duration == pytest.approx(expected.duration)
