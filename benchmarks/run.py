@@ -106,8 +106,10 @@ def sampling() -> None:
     knots = np.concatenate(([0.0], np.cumsum(durations)))
     spline = CubicSpline(knots, points, bc_type='clamped')
 
-    def scipy_sample(times):
-        return spline(times), spline(times, 1), spline(times, 2)
+    scipy_times = np.linspace(0.0, knots[-1], 100_000)
+
+    def scipy_sample():
+        return spline(scipy_times), spline(scipy_times, 1), spline(scipy_times, 2)
 
     for name, trajectory in [
         ('quintic', tg.quintic(START, GOAL, 40.0)),
@@ -118,8 +120,7 @@ def sampling() -> None:
         times = np.linspace(0.0, trajectory.duration, 100_000)
         seconds = seconds_per_call(lambda t=trajectory, s=times: t.sample(s))
         rate = times.size * JOINTS / seconds / 1e6
-        scipy_times = np.linspace(0.0, knots[-1], 100_000)
-        peer = times.size * JOINTS / seconds_per_call(lambda: scipy_sample(scipy_times)) / 1e6
+        peer = times.size * JOINTS / seconds_per_call(scipy_sample) / 1e6
         verdict = 'met' if rate >= 50.0 else 'MISSED'
         report(name, rate, 'scipy CubicSpline', peer, 'M/s', f'>= 50 M/s ({verdict})')
     ruckig_plan, ruckig_trajectory = ruckig_planner()
