@@ -25,6 +25,7 @@ setup(
     entry_points={
         'console_scripts': [
             'generator = traj_gen_ros.generator_node:main',
+            'traj-gen = traj_gen_ros.cli:main',
         ],
     },
 )

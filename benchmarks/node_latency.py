@@ -15,11 +15,11 @@ Run `python benchmarks/node_latency.py --bare RATE` to start only the bare timer
 import argparse
 import json
 import os
+from pathlib import Path
 import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 # One isolated domain per run; the bare-timer child inherits the parent's choice.
@@ -27,9 +27,9 @@ DOMAIN = os.environ.setdefault('NODE_LATENCY_DOMAIN', str(1 + os.getpid() % 100)
 os.environ['ROS_DOMAIN_ID'] = DOMAIN
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 
+from builtin_interfaces.msg import Duration  # noqa: E402
 import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
-from builtin_interfaces.msg import Duration  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from rclpy.serialization import deserialize_message  # noqa: E402

@@ -12,15 +12,14 @@ import os
 # idle-spinning BLAS workers make them many times slower.
 os.environ.setdefault('OPENBLAS_NUM_THREADS', '1')
 
+from pathlib import Path  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
 import timeit  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 import ruckig  # noqa: E402
 from scipy.interpolate import CubicSpline  # noqa: E402
-
 import traj_gen_ros as tg  # noqa: E402
 
 JOINTS = 6

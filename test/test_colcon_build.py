@@ -1,13 +1,13 @@
 """colcon (from PyPI) builds the package as ament_python; the installed executable runs."""
 
 import os
+from pathlib import Path
 import subprocess
 import sys
-from pathlib import Path
 
-import rclpy
 from catkin_pkg.package import parse_package
-from node_harness import REPO, NodeProcess, Probe, node_env
+from node_harness import node_env, NodeProcess, Probe, REPO
+import rclpy
 
 COLCON = Path(sys.executable).with_name('colcon')
 

@@ -2,11 +2,11 @@
 
 import signal
 
+from diagnostic_msgs.msg import DiagnosticStatus
+from node_harness import generator_session, JOINTS, NodeProcess, Probe, stamp_ns
 import numpy as np
 import pytest
 import rclpy
-from diagnostic_msgs.msg import DiagnosticStatus
-from node_harness import JOINTS, NodeProcess, Probe, generator_session, stamp_ns
 from rosgraph_msgs.msg import Clock
 
 

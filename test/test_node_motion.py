@@ -1,20 +1,19 @@
 """Integration: the generator as a subprocess, driven over DDS by a second node."""
 
-import numpy as np
-import pytest
-import rclpy
 from diagnostic_msgs.msg import DiagnosticStatus
 from node_harness import (
+    generator_session,
     JOINTS,
     MAX_ACCELERATION,
     MAX_VELOCITY,
-    generator_session,
     stamp_ns,
     trajectory_arrays,
     via_message,
 )
+import numpy as np
+import pytest
+import rclpy
 from rclpy.time import Time
-
 from traj_gen_ros import lspb_via, min_time
 
 RATE = 100.0

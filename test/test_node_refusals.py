@@ -3,16 +3,16 @@
 import math
 import re
 
-import numpy as np
-import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
 from node_harness import (
-    JOINTS,
     generator_session,
+    JOINTS,
     stamp_ns,
     trajectory_arrays,
     via_message,
 )
+import numpy as np
+import pytest
 from sensor_msgs.msg import JointState
 
 

@@ -2,8 +2,8 @@
 
 from pathlib import Path
 
-import pytest
 from ament_pep257.main import main
+import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 

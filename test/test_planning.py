@@ -2,28 +2,27 @@
 
 import math
 
-import numpy as np
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
+import numpy as np
+import pytest
 from traj_gen_ros import min_time
 from traj_gen_ros.planning import (
     GoalRequest,
     Hold,
-    PlannedMotion,
-    RequestError,
-    Schedule,
-    State,
     make_config,
     parse_goal,
     parse_via,
     plan_goal,
     plan_stop,
     plan_via,
+    PlannedMotion,
+    RequestError,
     sample_grid,
     sample_motion,
+    Schedule,
     split_nanoseconds,
+    State,
     via_points,
 )
 
@@ -31,8 +30,9 @@ JOINTS = ['a', 'b', 'c']
 
 
 def config(**changes):
-    values = dict(joints=JOINTS, rate_hz=100.0, profile='quintic', via_velocities='heuristic',
-                  max_velocity=[1.0, 2.0, 3.0], max_acceleration=4.0, lspb_acceleration=0.0)
+    values = {'joints': JOINTS, 'rate_hz': 100.0, 'profile': 'quintic',
+              'via_velocities': 'heuristic', 'max_velocity': [1.0, 2.0, 3.0],
+              'max_acceleration': 4.0, 'lspb_acceleration': 0.0}
     values.update(changes)
     return make_config(**values)
 

@@ -1,12 +1,11 @@
 import re
 
 import core_helpers as helpers
+from hypothesis import example, given, settings
 import hypothesis.strategies as st
 import numpy as np
 import pytest
-from hypothesis import example, given, settings
 from scipy.interpolate import CubicSpline
-
 from traj_gen_ros import (
     cubic,
     cubic_via,
@@ -127,8 +126,6 @@ def test_lspb_from_a_moving_start(move, factor):
     assert np.all(peak_acceleration <= acceleration * (1 + 1e-9))
 
 
-@pytest.mark.xfail(strict=True, reason='core bug: coefficients are formed from absolute '
-                   'positions, so rounding of q·M/T^k does not cancel for short segments')
 def test_short_quintic_of_a_still_joint_away_from_zero_stays_still():
     # Joint 1 holds at 3 for 1 ms: every coefficient but a0 should be 0 (Δ = 0).
     trajectory = quintic([0.0, 3.0], [0.0, 3.0], 1e-3)

@@ -1,19 +1,18 @@
 import math
 
 import core_helpers as helpers
+from hypothesis import assume, given, settings
 import hypothesis.strategies as st
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
-
 from traj_gen_ros import (
-    PROFILES,
     cubic,
     cubic_via,
     hold,
     lspb,
     lspb_via,
     min_time,
+    PROFILES,
     quintic_via,
     via_durations,
     within_limits,
@@ -170,17 +169,12 @@ def test_min_time_quintic_from_a_moving_start_keeps_its_acceleration(q0, qf, v0,
     helpers.assert_within(trajectory, 1.0, 1.0)
 
 
-@pytest.mark.xfail(strict=True, reason='core bug: min_time raises max_acceleration to |a0| '
-                   'for every profile, though only the quintic can start at a0')
 @pytest.mark.parametrize('profile', ['lspb', 'cubic'])
 def test_min_time_start_acceleration_does_not_raise_the_limit_of_lspb_or_cubic(profile):
     trajectory = min_time(0.0, 1.0, 1.0, 1.0, profile, v0=0.5, a0=5.0)
     helpers.assert_within(trajectory, 1.0, 1.0)
 
 
-@pytest.mark.xfail(strict=True, reason='core bug: polynomial coefficients are formed from '
-                   'absolute positions (q0·M/T^k + qf·M/T^k cancels), so a 1e-6 s plan of a '
-                   'still joint at 3 ends moving')
 def test_min_time_from_an_almost_still_start_ends_at_rest():
     trajectory = min_time([0.0, 3.0], [0.0, 3.0], 1.0, 1.0, 'quintic', v0=[0.0, 1e-12])
     assert trajectory.duration <= 1e-5

@@ -1,6 +1,5 @@
 import numpy as np
 import pytest
-
 from traj_gen_ros import (
     cubic,
     cubic_via,
@@ -106,14 +105,10 @@ def test_non_finite_point_velocities_are_refused():
             'velocities', 'point 1', 'joint 0')
 
 
-@pytest.mark.xfail(strict=True, reason='core bug: a non-finite segment duration is reported '
-                   'as "joint 1", not "segment 1"')
 def test_non_finite_segment_duration_names_the_segment():
     refused(lambda: cubic_via([0.0, 1.0, 2.0], [1.0, NAN]), 'durations', 'segment 1')
 
 
-@pytest.mark.xfail(strict=True, reason='core bug: per-point values given as a 1-D array '
-                   '(one joint) report a non-finite entry as "joint 1", not "point 1"')
 def test_non_finite_point_acceleration_of_one_joint_names_the_point():
     message = refused(lambda: quintic_via([0.0, 1.0, 2.0], [1.0, 1.0],
                                           accelerations=[0.0, NAN, 1.0]),
@@ -121,8 +116,6 @@ def test_non_finite_point_acceleration_of_one_joint_names_the_point():
     assert 'joint 1' not in message
 
 
-@pytest.mark.xfail(strict=True, reason='core bug: sample() passes NaN times through and '
-                   'returns NaN states instead of refusing them')
 def test_sample_refuses_non_finite_times():
     refused(lambda: cubic(0.0, 1.0, 1.0).sample([0.5, NAN]), 'times', 'finite')
 
@@ -144,16 +137,11 @@ def test_non_positive_limits_name_argument_and_joint(bad):
     refused(lambda: via_durations(PATH, 1.0, bad), 'max_acceleration', '> 0')
 
 
-@pytest.mark.xfail(strict=True, reason='core bug: via_durations does not check the blend '
-                   'acceleration; lspb_via\'s refusal is swallowed by the search, which '
-                   'reports "no duration up to 1e9 s keeps the motion within its limits"')
 def test_via_durations_refuses_a_negative_blend_acceleration():
     refused(lambda: via_durations(PATH, 1.0, 1.0, 'lspb', acceleration=-1.0),
             'acceleration', '> 0')
 
 
-@pytest.mark.xfail(strict=True, reason='core bug: via_durations does not check the velocity '
-                   'rule; cubic_via\'s refusal is swallowed, giving "no duration up to 1e9 s"')
 def test_via_durations_refuses_an_unknown_velocity_rule():
     refused(lambda: via_durations(PATH, 1.0, 1.0, 'cubic', velocities='bogus'),
             'velocities', 'bogus')

@@ -5,9 +5,7 @@ The core (everything but the node and the command-line tool) imports no ROS.
 """
 
 from traj_gen_ros.profiles import (
-    PROFILES,
     BlendedTrajectory,
-    Trajectory,
     continuous_velocities,
     cubic,
     cubic_via,
@@ -16,8 +14,10 @@ from traj_gen_ros.profiles import (
     lspb,
     lspb_via,
     min_time,
+    PROFILES,
     quintic,
     quintic_via,
+    Trajectory,
     via_durations,
     within_limits,
 )

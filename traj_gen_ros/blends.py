@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
 from traj_gen_ros import validation
 from traj_gen_ros.trajectory import Trajectory
 from traj_gen_ros.validation import ArrayLike
@@ -184,7 +183,8 @@ def _rest_start_blend_time(
     """
     Blend time ``t_b`` of eq. (5), after checking eq. (6) joint by joint.
 
-    ``t_b = t/2 - sqrt(θ̈² t² - 4 θ̈ |Δθ|)/(2 θ̈) = t/2 - sqrt(t² - 4 |Δθ|/θ̈)/2``.
+    ``t_b = t/2 - sqrt(θ̈² t² - 4 θ̈ |Δθ|)/(2 θ̈)``, evaluated as the equal
+    ``2 |Δθ| / (θ̈ (t + sqrt(t² - 4 |Δθ|/θ̈)))``, which does not cancel for tiny moves.
     """
     room = duration**2 - 4.0 * np.abs(displacement) / acceleration
     too_low = room < -_FEASIBILITY_TOLERANCE * duration**2
@@ -195,7 +195,8 @@ def _rest_start_blend_time(
             f'lspb: joint {joint}: acceleration {acceleration[joint]:g} is too low to move '
             f'{displacement[joint]:g} in {duration:g} s; eq. (6) needs at least '
             f'{_round_up(minimum)}')
-    return 0.5 * (duration - np.sqrt(np.maximum(room, 0.0)))
+    return 2.0 * np.abs(displacement) / (
+        acceleration * (duration + np.sqrt(np.maximum(room, 0.0))))
 
 
 def _moving_start_cruise(
@@ -260,12 +261,12 @@ def _via_timing(
     # First segment, eq. (2)-(3), from velocity v0: the excess over coasting at v0.
     excess = (path[1] - path[0]) - durations[0] * start_velocity
     first_disc = durations[0] ** 2 - 2.0 * np.abs(excess) / acceleration
-    first_blend = durations[0] - np.sqrt(np.maximum(first_disc, 0.0))
+    first_blend = _end_blend_time(durations[0], first_disc, excess, acceleration)
     first_velocity = start_velocity + np.sign(excess) * acceleration * first_blend
     # Last segment, eq. (4)-(5).
     last_step = path[-1] - path[-2]
     last_disc = durations[-1] ** 2 - 2.0 * np.abs(last_step) / acceleration
-    last_blend = durations[-1] - np.sqrt(np.maximum(last_disc, 0.0))
+    last_blend = _end_blend_time(durations[-1], last_disc, last_step, acceleration)
     last_velocity = last_step / (durations[-1] - 0.5 * last_blend)
     velocities = slopes.copy()
     velocities[0] = first_velocity
@@ -283,6 +284,19 @@ def _via_timing(
     return blend_times, velocities, linear_durations, np.stack([first_disc, last_disc])
 
 
+def _end_blend_time(
+    duration: float, discriminant: np.ndarray, step: np.ndarray, acceleration: np.ndarray
+) -> np.ndarray:
+    """
+    Blend time at the first or last point, eq. (3) and (5): ``t_d - sqrt(t_d² - 2|Δθ|/θ̈)``.
+
+    Evaluated as the equal ``(2|Δθ|/θ̈) / (t_d + sqrt(…))``, which does not cancel for tiny
+    steps.
+    """
+    return 2.0 * np.abs(step) / (acceleration * (duration + np.sqrt(np.maximum(discriminant,
+                                                                               0.0))))
+
+
 def _first_problem(
     timing: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], durations: np.ndarray
 ) -> tuple[int, str] | None:
@@ -294,11 +308,11 @@ def _first_problem(
     bad_linear = linear_durations < -slack
     for joint in range(blend_times.shape[1]):
         if bad_ends[0, joint]:
-            return joint, (f'the blend at point 0 cannot reach the first segment\'s line within '
+            return joint, ("the blend at point 0 cannot reach the first segment's line within "
                            f'its {durations[0]:g} s')
         if bad_ends[1, joint]:
             last = len(blend_times) - 1
-            return joint, (f'the blend at point {last} cannot leave the last segment\'s line '
+            return joint, (f"the blend at point {last} cannot leave the last segment's line "
                            f'within its {durations[-1]:g} s')
         overlapping = np.flatnonzero(bad_linear[:, joint])
         if overlapping.size:

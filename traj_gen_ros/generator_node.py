@@ -17,19 +17,19 @@ Interface (all names relative, so namespaces and remapping work):
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
+import sys
 
-import numpy as np
-import rclpy
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+import numpy as np
 from rcl_interfaces.msg import (
     FloatingPointRange,
     ParameterDescriptor,
     ParameterType,
     SetParametersResult,
 )
+import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
@@ -38,9 +38,8 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
-from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
-
 from traj_gen_ros import planning
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 NODE_NAME = 'trajectory_generator'
 DEFAULT_JOINTS = [f'joint_{index}' for index in range(1, 7)]

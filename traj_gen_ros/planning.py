@@ -17,9 +17,9 @@ Units are SI (rad, rad/s, rad/s^2, s); arrays are ``(samples, joints)``.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+import math
 from typing import NamedTuple, Protocol
 
 import numpy as np

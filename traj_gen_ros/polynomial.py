@@ -14,7 +14,6 @@ matrix product per segment for all joints at once.
 from __future__ import annotations
 
 import numpy as np
-
 from traj_gen_ros import validation
 from traj_gen_ros.trajectory import Trajectory
 from traj_gen_ros.validation import ArrayLike
@@ -231,10 +230,17 @@ def _segments(
     """
     Solve one polynomial per segment from its boundary conditions.
 
-    ``boundary`` is ``(segments, conditions, joints)`` in the matrix's column order and
-    ``exponents[k, i] = order_i - k`` undoes the normalised-time scaling.
+    ``boundary`` is ``(segments, conditions, joints)`` in the matrix's column order, the
+    start position first; ``exponents[k, i] = order_i - k`` undoes the normalised-time
+    scaling. Positions are taken relative to each segment's start, so a joint that does
+    not move keeps exactly zero higher coefficients however short the segment.
     """
     per_segment = matrix * durations[:, None, None] ** exponents
+    start = boundary[:, 0].copy()
+    relative = boundary.copy()
+    relative[:, exponents[0] == 0] -= start[:, None]
+    coefficients = per_segment @ relative
+    coefficients[:, 0] += start
     breakpoints = np.zeros(len(durations) + 1)
     np.cumsum(durations, out=breakpoints[1:])
-    return Trajectory(breakpoints, per_segment @ boundary)
+    return Trajectory(breakpoints, coefficients)

@@ -15,7 +15,7 @@ from traj_gen_ros.polynomial import (
     quintic,
     quintic_via,
 )
-from traj_gen_ros.timing import PROFILES, hold, min_time, via_durations, within_limits
+from traj_gen_ros.timing import hold, min_time, PROFILES, via_durations, within_limits
 from traj_gen_ros.trajectory import Trajectory
 
 __all__ = [

@@ -19,7 +19,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-
 from traj_gen_ros import validation
 from traj_gen_ros.blends import lspb, lspb_via, three_pieces
 from traj_gen_ros.polynomial import cubic, cubic_via, quintic, quintic_via
@@ -202,12 +201,15 @@ def via_durations(
         'max_acceleration', max_acceleration, joint_count)
     if profile not in PROFILES:
         raise ValueError(f'profile must be one of {", ".join(PROFILES)}, got "{profile}"')
+    if velocities not in ('heuristic', 'continuous'):
+        raise ValueError(f'velocities must be "heuristic" or "continuous", got "{velocities}"')
+    blend_acceleration = max_acceleration if acceleration is None else (
+        validation.positive_per_joint('acceleration', acceleration, joint_count))
     steps = np.abs(np.diff(path, axis=0))
     base = rest_to_rest_times(steps, max_velocity, max_acceleration, profile).max(axis=1)
     if not base.any():
         raise ValueError('every via point equals the start: there is nothing to move')
     base = np.maximum(base, 1e-6 * base.max())
-    blend_acceleration = max_acceleration if acceleration is None else acceleration
     planners = {
         'cubic': lambda durations: cubic_via(path, durations, velocities),
         'quintic': lambda durations: quintic_via(path, durations, velocities),
@@ -231,11 +233,14 @@ def _moving_min_time(
     """
     Shortest synchronised plan from a moving state to rest at ``goal``.
 
-    A start already beyond a limit (limits lowered mid-motion) is allowed to stay at
-    that level while it slows down, so a plan always exists.
+    A start already beyond a limit (limits lowered mid-motion) is allowed to stay at that
+    level while it slows down; so is the start acceleration, for the quintic, the one
+    profile that starts from it. A quintic whose start acceleration pushes a joint at its
+    velocity limit further out has no duration that works: that raises ``ValueError``.
     """
     max_velocity = np.maximum(max_velocity, np.abs(start_velocity))
-    max_acceleration = np.maximum(max_acceleration, np.abs(start_acceleration))
+    if profile == 'quintic':
+        max_acceleration = np.maximum(max_acceleration, np.abs(start_acceleration))
     distance = np.abs(goal - start)
     stopping = start_velocity**2 / (2.0 * max_acceleration)
     lower = float(np.max(rest_to_rest_times(distance + stopping, max_velocity,
@@ -248,4 +253,10 @@ def _moving_min_time(
         'lspb': lambda duration: lspb(start, goal, duration, max_acceleration,
                                       v0=start_velocity),
     }
-    return shortest_duration(planners[profile], lower, max_velocity, max_acceleration)
+    try:
+        return shortest_duration(planners[profile], lower, max_velocity, max_acceleration)
+    except ValueError:
+        raise ValueError(
+            f'no {profile} from velocity {start_velocity.tolist()} and acceleration '
+            f'{start_acceleration.tolist()} stays within the limits, however long; stop first '
+            'or choose another profile') from None

@@ -10,8 +10,8 @@ Units: seconds for time, radians (or metres) for position.
 
 from __future__ import annotations
 
-import math
 from functools import cached_property
+import math
 
 import numpy as np
 
@@ -63,7 +63,11 @@ class Trajectory:
         ``[1, τ, τ², …] @ coefficients``; sparse sampling gathers each sample's
         coefficients and runs Horner's rule on all of them at once.
         """
-        times = np.clip(np.asarray(times, dtype=float).reshape(-1), 0.0, self.duration)
+        times = np.asarray(times, dtype=float).reshape(-1)
+        if not np.isfinite(times).all():
+            raise ValueError(f'times must be finite: sample {np.argmin(np.isfinite(times))} '
+                             f'is {times[np.argmin(np.isfinite(times))]}')
+        times = np.clip(times, 0.0, self.duration)
         breakpoints, coefficients = self._shared_pieces
         if times.size < _SAMPLES_PER_PIECE_FOR_MATMUL * len(coefficients):
             piece = np.searchsorted(breakpoints[1:-1], times, side='right')

@@ -14,16 +14,21 @@ import numpy as np
 ArrayLike = float | Sequence[float] | np.ndarray
 
 
-def _describe_bad(values: np.ndarray) -> str:
-    """Name the first non-finite entry of a 1-D or 2-D array (index and value)."""
+def _describe_bad(values: np.ndarray, item: str = 'joint') -> str:
+    """Name the first non-finite entry (index and value); ``item`` names a 1-D index."""
     index = tuple(int(i) for i in np.argwhere(~np.isfinite(values))[0])
     if len(index) == 2:
         return f'point {index[0]}, joint {index[1]} is {values[index]}'
-    return f'joint {index[0]} is {values[index]}' if index else f'it is {values}'
+    return f'{item} {index[0]} is {values[index]}' if index else f'it is {values}'
 
 
-def finite_array(name: str, value: ArrayLike, max_ndim: int) -> np.ndarray:
-    """``value`` as a float array of at most ``max_ndim`` dimensions with finite entries."""
+def finite_array(name: str, value: ArrayLike, max_ndim: int, item: str = 'joint') -> np.ndarray:
+    """
+    Return ``value`` as a float array of at most ``max_ndim`` dimensions, all finite.
+
+    ``item`` names what a 1-D array is indexed by (joint, point, segment, sample) in the
+    error message.
+    """
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as error:
@@ -31,7 +36,7 @@ def finite_array(name: str, value: ArrayLike, max_ndim: int) -> np.ndarray:
     if array.ndim > max_ndim:
         raise ValueError(f'{name} has {array.ndim} dimensions; at most {max_ndim} allowed')
     if not np.isfinite(array).all():
-        raise ValueError(f'{name} must be finite: {_describe_bad(array)}')
+        raise ValueError(f'{name} must be finite: {_describe_bad(array, item)}')
     return array
 
 
@@ -94,7 +99,7 @@ def path_points(points: ArrayLike) -> np.ndarray:
 
 def segment_durations(durations: ArrayLike, segment_count: int) -> np.ndarray:
     """One finite, strictly positive duration per segment, ``(segments,)``."""
-    array = np.atleast_1d(finite_array('durations', durations, max_ndim=1))
+    array = np.atleast_1d(finite_array('durations', durations, max_ndim=1, item='segment'))
     if array.size != segment_count:
         raise ValueError(f'durations has {array.size} entries for {segment_count} segments '
                          f'({segment_count + 1} points); give one per segment')
@@ -106,7 +111,7 @@ def segment_durations(durations: ArrayLike, segment_count: int) -> np.ndarray:
 
 def per_point(name: str, value: ArrayLike, shape: tuple[int, int]) -> np.ndarray:
     """Return a value at every path point as ``(points, joints)``."""
-    array = finite_array(name, value, max_ndim=2)
+    array = finite_array(name, value, max_ndim=2, item='point')
     if array.ndim == 1 and shape[1] == 1:
         array = array[:, None]
     if array.shape != shape:
