@@ -25,5 +25,10 @@ test: $(STAMP) lint
 bench: $(STAMP)
 	$(PY) benchmarks/run.py
 
+# The lecture's examples offline and through a running node; plots in out/ (traj-gen is
+# `$(PY) -m traj_gen_ros.cli` here, `traj-gen` once the package is installed).
+demo: $(STAMP)
+	PY=$(PY) scripts/demo.sh
+
 clean:
 	rm -rf $(VENV) build install log .pytest_cache .ruff_cache
