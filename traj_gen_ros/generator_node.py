@@ -39,7 +39,8 @@ from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from traj_gen_ros import planning
-from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from traj_gen_ros.trajectory_wire import joint_trajectory_cdr
+from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
 DEFAULT_JOINTS = [f'joint_{index}' for index in range(1, 7)]
@@ -69,8 +70,6 @@ class TrajectoryGenerator(Node):
         start = planning.PlannedMotion(planning.Hold(initial), 'hold', initial)
         self._schedule = planning.Schedule(start)
         self._names = list(self._config.joints)
-        self._grid: list[Duration] = []
-        self._grid_rate = 0.0
         reliable = ReliabilityPolicy.RELIABLE
         self._joint_states = self.create_publisher(
             JointState, 'joint_states', QoSProfile(depth=10, reliability=reliable))
@@ -155,30 +154,18 @@ class TrajectoryGenerator(Node):
         message.header.stamp = now.to_msg()
         self._joint_states.publish(message)
 
-    def _trajectory_message(self, start_ns: int,
-                            motion: planning.PlannedMotion) -> JointTrajectory:
+    def _trajectory_message(self, start_ns: int, motion: planning.PlannedMotion) -> bytes:
+        """
+        Serialise the plan, sampled every ``1/rate_hz`` s, as a ``JointTrajectory``.
+
+        Written straight to CDR from the sample arrays (``trajectory_wire``): a 1000-point
+        message costs a fraction of a millisecond instead of one rclpy object per point.
+        """
         times, positions, velocities, accelerations = planning.sample_motion(
             motion, self._config.rate_hz)
-        points = [
-            JointTrajectoryPoint(positions=p, velocities=v, accelerations=a, time_from_start=t)
-            for p, v, a, t in zip(positions.tolist(), velocities.tolist(),
-                                  accelerations.tolist(), self._durations(times), strict=True)]
-        message = JointTrajectory(joint_names=self._names, points=points)
-        message.header.stamp = Time(nanoseconds=start_ns).to_msg()
-        return message
-
-    def _durations(self, times: np.ndarray) -> list[Duration]:
-        """Return ``time_from_start`` messages, reusing those of the regular grid."""
-        grid = planning.sample_grid_count(times, self._config.rate_hz)
-        if len(self._grid) < grid or self._grid_rate != self._config.rate_hz:
-            seconds, nanoseconds = planning.split_nanoseconds(
-                np.arange(max(grid, 2 * len(self._grid))) / self._config.rate_hz)
-            self._grid = [Duration(sec=s, nanosec=n)
-                          for s, n in zip(seconds, nanoseconds, strict=True)]
-            self._grid_rate = self._config.rate_hz
-        seconds, nanoseconds = planning.split_nanoseconds(times[grid:])
-        return self._grid[:grid] + [Duration(sec=s, nanosec=n)
-                                    for s, n in zip(seconds, nanoseconds, strict=True)]
+        time_ns = np.round(times * 1e9).astype(np.int64)
+        return joint_trajectory_cdr(start_ns, self._names, time_ns, positions, velocities,
+                                    accelerations)
 
     # ------------------------------------------------------------------ requests
 

@@ -1,0 +1,96 @@
+"""
+Serialise a sampled plan as a ``trajectory_msgs/JointTrajectory`` in CDR, with numpy.
+
+Building a 1000-point ``JointTrajectory`` as rclpy message objects costs tens of
+milliseconds (one Python object per point, one check per float). Its wire form is plain:
+little-endian CDR (XCDR1, as rmw_fastrtps writes it) where every point of an ``n``-joint
+plan has the same layout. This module writes those bytes directly; rclpy's
+``Publisher.publish`` sends ``bytes`` as they are. No ROS import: the layout is the
+message definition's, checked field by field against ``rclpy.serialization`` in the tests.
+
+CDR rules used: a 4-byte encapsulation header (``00 01 00 00``: CDR, little endian), then
+every primitive aligned to its size relative to the end of that header; a string is a
+``uint32`` length (with the terminating NUL) and its bytes; a sequence is a ``uint32``
+count and its elements.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+_ENCAPSULATION = b'\x00\x01\x00\x00'
+_NANOSECONDS_PER_SECOND = 1_000_000_000
+
+
+def _point_dtype(joint_count: int, starts_on_eight: bool) -> np.dtype:
+    """
+    Give the packed layout of one ``JointTrajectoryPoint``.
+
+    A point starting 8-aligned pads after its first count; one starting 4 past an
+    8-boundary does not. Either way each double array lands 8-aligned. Effort is empty.
+    """
+    doubles = ('<f8', (joint_count,))
+    fields = [('positions_count', '<u4')]
+    if starts_on_eight:
+        fields.append(('positions_pad', '<u4'))
+    fields += [('positions', *doubles),
+               ('velocities_count', '<u4'), ('velocities_pad', '<u4'),
+               ('velocities', *doubles),
+               ('accelerations_count', '<u4'), ('accelerations_pad', '<u4'),
+               ('accelerations', *doubles),
+               ('effort_count', '<u4'), ('sec', '<i4'), ('nanosec', '<u4')]
+    return np.dtype(fields)
+
+
+def _string(text: str, offset: int) -> bytes:
+    """Encode a CDR string written at payload ``offset`` (a multiple of 4)."""
+    encoded = text.encode() + b'\x00'
+    padding = (-(offset + 4 + len(encoded))) % 4
+    return len(encoded).to_bytes(4, 'little') + encoded + b'\x00' * padding
+
+
+def joint_trajectory_cdr(
+    stamp_ns: int,
+    joint_names: Sequence[str],
+    time_from_start_ns: np.ndarray,
+    positions: np.ndarray,
+    velocities: np.ndarray,
+    accelerations: np.ndarray,
+    frame_id: str = '',
+) -> bytes:
+    """
+    Serialise a ``JointTrajectory`` whose points are rows of ``(points, joints)`` arrays.
+
+    :param stamp_ns: ``header.stamp`` in nanoseconds.
+    :param joint_names: the joint names, in column order.
+    :param time_from_start_ns: each point's ``time_from_start`` in nanoseconds, ``(points,)``.
+    :param positions: rad, ``(points, joints)``; likewise velocities (rad/s) and
+        accelerations (rad/s²). Effort is left empty.
+    :param frame_id: ``header.frame_id``.
+    """
+    seconds, nanoseconds = divmod(int(stamp_ns), _NANOSECONDS_PER_SECOND)
+    head = bytearray(seconds.to_bytes(4, 'little', signed=True)
+                     + nanoseconds.to_bytes(4, 'little'))
+    head += _string(frame_id, len(head))
+    head += len(joint_names).to_bytes(4, 'little')
+    for name in joint_names:
+        head += _string(name, len(head))
+    point_count, joint_count = positions.shape
+    head += point_count.to_bytes(4, 'little')
+    if point_count == 0:
+        return _ENCAPSULATION + bytes(head)
+    first_on_eight = len(head) % 8 == 0
+    first = np.zeros(1, _point_dtype(joint_count, first_on_eight))
+    rest = np.zeros(point_count - 1, _point_dtype(joint_count, False))
+    time_ns = np.asarray(time_from_start_ns, dtype=np.int64)
+    if time_ns.min() < 0 or time_ns.max() >= 2**31 * _NANOSECONDS_PER_SECOND:
+        raise ValueError('time_from_start must lie in [0, 2**31) s to fit a Duration message')
+    for points, rows in ((first, slice(0, 1)), (rest, slice(1, None))):
+        for field, values in (('positions', positions), ('velocities', velocities),
+                              ('accelerations', accelerations)):
+            points[f'{field}_count'] = joint_count
+            points[field] = values[rows]
+        points['sec'], points['nanosec'] = np.divmod(time_ns[rows], _NANOSECONDS_PER_SECOND)
+    return _ENCAPSULATION + bytes(head) + first.tobytes() + rest.tobytes()
