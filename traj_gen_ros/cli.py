@@ -510,4 +510,6 @@ def _one_line(error: BaseException) -> str:
 
 
 if __name__ == '__main__':
-    sys.exit(main())
+    # Run the importable module, not this __main__ copy, so that cli_ros shares its classes.
+    from traj_gen_ros.cli import main as _main
+    sys.exit(_main())
