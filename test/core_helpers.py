@@ -85,17 +85,14 @@ def reference_peaks(trajectory):
     The extrema of a polynomial on an interval lie at its ends or where its derivative
     vanishes; the roots come from ``numpy.polynomial``, independent of ``peaks()``. Every
     root's real part, clipped into the piece, is a candidate (rounding may give a double
-    root a small imaginary part). Pieces shorter than 1e-12 of the duration (a blend
-    from a start velocity of 1e-200) are not motion and are passed over.
+    root a small imaginary part). Every piece counts, however short: a blend of 1e-20 s
+    still runs at its blend acceleration.
     """
     _, lengths = piece_spans(trajectory)
-    negligible = 1e-12 * max(1.0, trajectory.duration)
     result = np.zeros((2, trajectory.joint_count))
     for joint in range(trajectory.joint_count):
         for piece in range(trajectory.piece_count):
             length = lengths[piece, joint]
-            if length < negligible and trajectory.piece_count > 1:
-                continue
             velocity = poly.polyder(trajectory.coefficients[piece, :, joint])
             for order, series in enumerate((velocity, poly.polyder(velocity))):
                 peak = _largest_magnitude(series, length)

@@ -6,6 +6,7 @@ The core (everything but the node and the command-line tool) imports no ROS.
 
 from traj_gen_ros.profiles import (
     BlendedTrajectory,
+    brake,
     continuous_velocities,
     cubic,
     cubic_via,
@@ -26,6 +27,7 @@ __all__ = [
     'PROFILES',
     'BlendedTrajectory',
     'Trajectory',
+    'brake',
     'continuous_velocities',
     'cubic',
     'cubic_via',

@@ -235,12 +235,17 @@ def _segments(
     scaling. Positions are taken relative to each segment's start, so a joint that does
     not move keeps exactly zero higher coefficients however short the segment.
     """
-    per_segment = matrix * durations[:, None, None] ** exponents
     start = boundary[:, 0].copy()
     relative = boundary.copy()
     relative[:, exponents[0] == 0] -= start[:, None]
-    coefficients = per_segment @ relative
+    with np.errstate(over='ignore', invalid='ignore'):
+        coefficients = (matrix * durations[:, None, None] ** exponents) @ relative
     coefficients[:, 0] += start
+    if not np.isfinite(coefficients).all():
+        segment = int(np.argmin(np.isfinite(coefficients).all(axis=(1, 2))))
+        raise ValueError(f'segment {segment} lasts {durations[segment]:g} s, too short for its '
+                         'boundary conditions: its coefficients overflow; give a longer '
+                         'duration')
     breakpoints = np.zeros(len(durations) + 1)
     np.cumsum(durations, out=breakpoints[1:])
     return Trajectory(breakpoints, coefficients)

@@ -6,7 +6,7 @@ Positions are scalars (one joint) or 1-D arrays (one value per joint); via point
 SI: rad (or m), s.
 """
 
-from traj_gen_ros.blends import BlendedTrajectory, lspb, lspb_via
+from traj_gen_ros.blends import BlendedTrajectory, brake, lspb, lspb_via
 from traj_gen_ros.polynomial import (
     continuous_velocities,
     cubic,
@@ -22,6 +22,7 @@ __all__ = [
     'PROFILES',
     'BlendedTrajectory',
     'Trajectory',
+    'brake',
     'continuous_velocities',
     'cubic',
     'cubic_via',

@@ -29,6 +29,8 @@ PROFILES = ('lspb', 'cubic', 'quintic')
 # (peak velocity, peak acceleration) of a rest-to-rest unit move in unit time.
 _POLYNOMIAL_PEAKS = {'cubic': (1.5, 6.0), 'quintic': (15.0 / 8.0, 10.0 / np.sqrt(3.0))}
 _LIMIT_TOLERANCE = 1e-9
+# Polynomial plans last at least this long (s): shorter ones' coefficients ~ Δ/T⁵ overflow.
+_SHORTEST_POLYNOMIAL = 1e-9
 _BISECTION_STEPS = 60
 
 
@@ -79,7 +81,8 @@ def min_time(
     duration = float(joint_times.max())
     if duration == 0.0:
         return hold(start)
-    return (cubic if profile == 'cubic' else quintic)(start, goal, duration)
+    polynomial = cubic if profile == 'cubic' else quintic
+    return polynomial(start, goal, max(duration, _SHORTEST_POLYNOMIAL))
 
 
 def _min_time_lspb(
@@ -245,7 +248,8 @@ def _moving_min_time(
     stopping = start_velocity**2 / (2.0 * max_acceleration)
     lower = float(np.max(rest_to_rest_times(distance + stopping, max_velocity,
                                             max_acceleration, profile)))
-    lower = max(lower * 0.25, float(np.max(np.abs(start_velocity) / max_acceleration)), 1e-6)
+    lower = max(lower * 0.25, float(np.max(np.abs(start_velocity) / max_acceleration)),
+                _SHORTEST_POLYNOMIAL)
     planners = {
         'cubic': lambda duration: cubic(start, goal, duration, v0=start_velocity),
         'quintic': lambda duration: quintic(start, goal, duration, v0=start_velocity,

@@ -109,6 +109,8 @@ class Trajectory:
         if self.breakpoints.ndim == 1:
             return self.breakpoints, self.coefficients
         union = np.unique(self.breakpoints)
+        if union.size == 1:  # zero duration: one zero-length piece, each joint's last
+            union = np.repeat(union, 2)
         starts = union[:-1]
         joints = np.arange(self.joint_count)
         piece = np.empty((starts.size, self.joint_count), dtype=np.intp)
@@ -137,7 +139,7 @@ class Trajectory:
     def _sample_sorted(self, times: np.ndarray) -> np.ndarray:
         """Evaluate ascending ``times`` piece by piece: ``(3, samples, joints)``."""
         breakpoints = self._shared_pieces[0]
-        states = np.empty((3, times.size, self.joint_count))
+        states = np.zeros((3, times.size, self.joint_count))
         edges = np.searchsorted(times, breakpoints, side='left')
         edges[0], edges[-1] = 0, times.size
         for piece in np.flatnonzero(edges[1:] > edges[:-1]):
