@@ -17,8 +17,12 @@ Interface (all names relative, so namespaces and remapping work):
 
 from __future__ import annotations
 
+import collections
 from collections.abc import Callable
+from dataclasses import dataclass
 import sys
+import threading
+import time
 
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
@@ -31,11 +35,10 @@ from rcl_interfaces.msg import (
 )
 import rclpy
 from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from traj_gen_ros import planning
@@ -47,6 +50,25 @@ DEFAULT_JOINTS = [f'joint_{index}' for index in range(1, 7)]
 CONFIG_PARAMETERS = ('joints', 'rate_hz', 'profile', 'via_velocities', 'max_velocity',
                      'max_acceleration', 'lspb_acceleration')
 PER_JOINT = 'one value for all joints, or one per joint'
+#: The planner thread gets the GIL back this often (s) so the stream keeps its rate.
+SWITCH_INTERVAL = 0.0005
+#: Look-ahead of a new plan's start: at least this many stream periods ...
+LEAD_PERIODS = 2
+#: ... and this multiple of the slowest of the recent planning times, at most MAX_LEAD s.
+LEAD_FACTOR = 2.0
+MAX_LEAD = 1.0
+#: A plan whose start the stream passed while it was planned is re-planned this often.
+PLAN_ATTEMPTS = 4
+
+
+@dataclass
+class _Request:
+    """A parsed request waiting for the planner; ``plan`` plans it from a state."""
+
+    kind: str
+    values: dict[str, str]
+    stamp_ns: int
+    plan: Callable[[planning.Config, planning.State, np.ndarray], planning.PlannedMotion]
 
 
 def _descriptor(description: str, **extra: object) -> ParameterDescriptor:
@@ -70,6 +92,18 @@ class TrajectoryGenerator(Node):
         start = planning.PlannedMotion(planning.Hold(initial), 'hold', initial)
         self._schedule = planning.Schedule(start)
         self._names = list(self._config.joints)
+        # The executor thread streams and parses; the planner thread plans (see _run_planner).
+        # _lock guards the schedule, the last published time and the schedule version.
+        self._lock = threading.Lock()
+        self._last_published_ns = -(2 ** 62)
+        self._version = 0
+        self._received = 0
+        self._plan_times = collections.deque([0.0], maxlen=8)
+        # _wake guards the newest request waiting for the planner and the stop plans to send.
+        self._wake = threading.Condition()
+        self._inbox: _Request | None = None
+        self._outbox: list[tuple[str, int, int, planning.PlannedMotion, dict]] = []
+        self._closing = False
         reliable = ReliabilityPolicy.RELIABLE
         self._joint_states = self.create_publisher(
             JointState, 'joint_states', QoSProfile(depth=10, reliability=reliable))
@@ -85,6 +119,8 @@ class TrajectoryGenerator(Node):
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._trajectory_message(0, start)  # warm up the message imports
+        self._planner = threading.Thread(target=self._run_planner, name='planner', daemon=True)
+        self._planner.start()
         self.get_logger().info(
             f'streaming {len(self._names)} joints at {self._config.rate_hz:g} Hz, '
             f'profile {self._config.profile}')
@@ -147,12 +183,14 @@ class TrajectoryGenerator(Node):
         return self.get_clock().now().nanoseconds
 
     def _publish_setpoint(self) -> None:
-        now = self.get_clock().now()
-        state = self._schedule.state_at(now.nanoseconds)
-        message = JointState(name=self._names, position=state.position.tolist(),
-                             velocity=state.velocity.tolist())
-        message.header.stamp = now.to_msg()
-        self._joint_states.publish(message)
+        with self._lock:  # the planner thread publishes too: keep the stamps in order
+            now = self.get_clock().now()
+            state = self._schedule.state_at(now.nanoseconds)
+            self._last_published_ns = now.nanoseconds
+            message = JointState(name=self._names, position=state.position.tolist(),
+                                 velocity=state.velocity.tolist())
+            message.header.stamp = now.to_msg()
+            self._joint_states.publish(message)
 
     def _trajectory_message(self, start_ns: int, motion: planning.PlannedMotion) -> bytes:
         """
@@ -168,85 +206,208 @@ class TrajectoryGenerator(Node):
                                     accelerations)
 
     # ------------------------------------------------------------------ requests
+    #
+    # Callbacks (executor thread) only parse: a malformed request is refused at once. A
+    # well-formed one goes to the inbox, which holds only the newest: one still waiting
+    # there is answered "superseded". The planner thread plans the newest request from the
+    # setpoint a short look-ahead in the future (the stream keeps running meanwhile) and
+    # splices it in only if the stream has not passed that start yet, so nothing jumps.
+
+    def _request_values(self, kind: str, frame_id: str) -> dict[str, str]:
+        self._received += 1
+        return {'request': kind, 'request_id': str(self._received), 'frame_id': frame_id}
 
     def _on_goal(self, message: JointState) -> None:
-        def plan(now_ns: int) -> tuple[int, planning.PlannedMotion]:
+        values = self._request_values('goal', message.header.frame_id)
+        try:
             request = planning.parse_goal(self._names, message.name, message.position)
-            state = self._schedule.state_at(now_ns)
-            hold = self._schedule.end_position(now_ns)
-            return now_ns, planning.plan_goal(self._config, state, hold, request)
-        self._handle('goal', plan)
+        except planning.RequestError as error:
+            self._report(DiagnosticStatus.ERROR, f'goal refused: {error}', values)
+            return
+
+        def plan(config: planning.Config, state: planning.State,
+                 hold: np.ndarray) -> planning.PlannedMotion:
+            return planning.plan_goal(config, state, hold, request)
+        self._submit(_Request('goal', values, 0, plan))
 
     def _on_via_points(self, message: JointTrajectory) -> None:
-        def plan(now_ns: int) -> tuple[int, planning.PlannedMotion]:
+        values = self._request_values('via_points', message.header.frame_id)
+        points = message.points
+        if len(points) <= planning.MAX_VIA_POINTS:  # parse_via refuses longer ones unread
             points = [(p.positions, p.velocities, p.accelerations, _seconds(p.time_from_start))
-                      for p in message.points]
+                      for p in points]
+        try:
             request = planning.parse_via(self._names, message.joint_names, points)
-            start_ns = max(now_ns, Time.from_msg(message.header.stamp).nanoseconds)
-            state = self._schedule.state_at(start_ns)
-            hold = self._schedule.end_position(start_ns)
-            return start_ns, planning.plan_via(self._config, state, hold, request)
-        self._handle('via_points', plan)
+        except planning.RequestError as error:
+            self._report(DiagnosticStatus.ERROR, f'via_points refused: {error}', values)
+            return
+        stamp = message.header.stamp
+        stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # may be negative: "now"
+
+        def plan(config: planning.Config, state: planning.State,
+                 hold: np.ndarray) -> planning.PlannedMotion:
+            return planning.plan_via(config, state, hold, request)
+        self._submit(_Request('via_points', values, stamp_ns, plan))
+
+    def _submit(self, request: _Request) -> None:
+        with self._wake:
+            older, self._inbox = self._inbox, request
+            self._wake.notify()
+        if older is not None:
+            self._supersede(older, 'a newer request')
+
+    def _supersede(self, request: _Request, by: str) -> None:
+        self._report(DiagnosticStatus.WARN, f'{request.kind} superseded by {by} before it was '
+                     'planned: not executed', request.values, log=False)
 
     def _on_stop(self, request: Trigger.Request, response: Trigger.Response
                  ) -> Trigger.Response:
         del request
-        now_ns = self._now_ns()
-        motion = planning.plan_stop(self._config, self._schedule.state_at(now_ns))
-        self._execute('stop', now_ns, now_ns, motion)
+        with self._wake:
+            pending, self._inbox = self._inbox, None
+        with self._lock:
+            now_ns = self._now_ns()
+            motion = planning.plan_stop(self._config, self._schedule.state_at(now_ns))
+            self._schedule.splice(now_ns, motion, now_ns)
+            self._version += 1
+        if pending is not None:
+            self._supersede(pending, '~/stop')
+        self._publish_setpoint()
+        self._rephase()
+        with self._wake:
+            self._outbox.append(('stop', now_ns, now_ns, motion, {'request': 'stop'}))
+            self._wake.notify()
         response.success = True
         response.message = f'stopping: at rest in {motion.plan.duration:.3f} s'
         return response
 
-    def _handle(self, kind: str,
-                plan: Callable[[int], tuple[int, planning.PlannedMotion]]) -> None:
-        now_ns = self._now_ns()
+    # ------------------------------------------------------------------ planner thread
+
+    def _run_planner(self) -> None:
+        """Plan the newest request and publish plans, off the stream's thread."""
+        while True:
+            with self._wake:
+                while not self._closing and self._inbox is None and not self._outbox:
+                    self._wake.wait()
+                if self._closing:
+                    return
+                outbox, self._outbox = self._outbox, []
+                request, self._inbox = self._inbox, None
+            try:
+                for kind, now_ns, start_ns, motion, values in outbox:
+                    self._execute(kind, now_ns, start_ns, motion, values)
+                if request is not None:
+                    self._plan_request(request)
+            except Exception as error:  # noqa: BLE001 - the planner must outlive any request
+                if self._closing or not self.context.ok():
+                    return
+                self.get_logger().error(f'planner: unexpected failure: {error!r}')
+
+    def _rephase(self) -> None:
+        """Restart the stream period from now (the timer may be replaced concurrently)."""
         try:
-            start_ns, motion = plan(now_ns)
-        except planning.RequestError as error:
-            self._report(DiagnosticStatus.ERROR, f'{kind} refused: {error}', {'request': kind})
+            self._timer.reset()
+        except Exception:  # noqa: BLE001 - a rate change destroyed it: the new one runs
+            pass
+
+    def _lead_ns(self, config: planning.Config) -> int:
+        """Look-ahead of a new plan's start: a few periods, more if planning is slow."""
+        lead = max(LEAD_PERIODS / config.rate_hz, LEAD_FACTOR * max(self._plan_times))
+        return int(min(lead, MAX_LEAD) * 1e9)
+
+    def _plan_request(self, request: _Request) -> None:
+        config = self._config
+        lead_ns = self._lead_ns(config)
+        for _ in range(PLAN_ATTEMPTS):
+            with self._lock:
+                now_ns = self._now_ns()
+                version = self._version
+                start_ns = max(request.stamp_ns, now_ns + lead_ns)
+                state = self._schedule.state_at(start_ns)
+                hold = self._schedule.end_position(start_ns)
+            began = time.perf_counter()
+            try:
+                motion = request.plan(config, state, hold)
+            except planning.RequestError as error:
+                self._report(DiagnosticStatus.ERROR, f'{request.kind} refused: {error}',
+                             request.values)
+                return
+            except Exception as error:  # noqa: BLE001 - a bad request must never kill the node
+                self.get_logger().error(f'unexpected failure planning {request.kind}: '
+                                        f'{error!r}')
+                self._report(DiagnosticStatus.ERROR, f'{request.kind} refused: internal '
+                             f'error: {error}', request.values)
+                return
+            elapsed = time.perf_counter() - began
+            self._plan_times.append(elapsed)
+            with self._lock:
+                stopped = self._version != version  # ~/stop came in while this was planned
+                spliced = not stopped and self._last_published_ns < start_ns
+                if spliced:
+                    self._schedule.splice(start_ns, motion, self._now_ns())
+                    self._version += 1
+            if stopped:
+                self._supersede(request, '~/stop')
+                return
+            if spliced:
+                break
+            lead_ns = int(min(max(2 * lead_ns, LEAD_FACTOR * elapsed * 1e9), MAX_LEAD * 1e9))
+        else:
+            self._report(DiagnosticStatus.ERROR, f'{request.kind} refused: the stream passed '
+                         f'its start {PLAN_ATTEMPTS} times while it was planned (look-ahead '
+                         f'up to {lead_ns * 1e-9:.3f} s); resend it', request.values)
             return
-        except Exception as error:  # noqa: BLE001 - a bad request must never kill the node
-            self.get_logger().error(f'unexpected failure planning {kind}: {error!r}')
-            self._report(DiagnosticStatus.ERROR, f'{kind} refused: internal error: {error}',
-                         {'request': kind})
-            return
-        self._execute(kind, now_ns, start_ns, motion)
+        delayed = request.stamp_ns > now_ns + lead_ns
+        if not delayed:  # the new motion's first setpoint goes out as it starts
+            time.sleep(max(0.0, min(start_ns - self._now_ns(), MAX_LEAD * 1e9) * 1e-9))
+            self._publish_setpoint()
+            self._rephase()
+        self._execute(request.kind, now_ns, start_ns, motion, request.values, delayed)
 
     def _execute(self, kind: str, now_ns: int, start_ns: int,
-                 motion: planning.PlannedMotion) -> None:
-        self._schedule.splice(start_ns, motion, now_ns)
-        if start_ns == now_ns:  # the new motion's first setpoint goes out at once
-            self._publish_setpoint()
-            self._timer.reset()
+                 motion: planning.PlannedMotion, values: dict[str, str] | None = None,
+                 delayed: bool = False) -> None:
         self._trajectory.publish(self._trajectory_message(start_ns, motion))
         duration = motion.plan.duration
         text = (f'accepted: profile={motion.profile}, duration={duration:.3f} s, '
                 f'joints={len(self._names)}')
-        if start_ns > now_ns:
+        if delayed:
             text += f', starts in {(start_ns - now_ns) * 1e-9:.3f} s'
         if motion.note:
             text += f' ({motion.note})'
         self._report(DiagnosticStatus.OK, text, {
-            'request': kind, 'profile': motion.profile, 'duration': f'{duration:.6f}',
-            'joints': str(len(self._names)), 'start_delay': f'{(start_ns - now_ns) * 1e-9:.6f}'})
+            **(values or {'request': kind}), 'profile': motion.profile,
+            'duration': f'{duration:.6f}', 'joints': str(len(self._names)),
+            'start_delay': f'{(start_ns - now_ns) * 1e-9:.6f}'})
 
-    def _report(self, level: bytes, text: str, values: dict[str, str]) -> None:
-        if level != DiagnosticStatus.OK:
+    def _report(self, level: bytes, text: str, values: dict[str, str],
+                log: bool = True) -> None:
+        if log and level != DiagnosticStatus.OK:
             self.get_logger().warning(text)
         self._status.publish(DiagnosticStatus(
             level=level, name=self.get_fully_qualified_name(), message=text,
             values=[KeyValue(key=key, value=value) for key, value in values.items()]))
 
+    def destroy_node(self) -> None:
+        """Stop the planner thread, then destroy the node."""
+        with self._wake:
+            self._closing = True
+            self._wake.notify()
+        self._planner.join(timeout=10.0)
+        super().destroy_node()
+
 
 def main(args: list[str] | None = None) -> int:
     """Run the generator until SIGINT/SIGTERM; return the exit status."""
     rclpy.init(args=args)
+    sys.setswitchinterval(SWITCH_INTERVAL)
     node = None
     status = 0
     try:
         node = TrajectoryGenerator()
-        rclpy.spin(node)
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (ValueError, ParameterException) as error:

@@ -35,6 +35,14 @@ START_TOLERANCE = 1e-6
 LIMIT_TOLERANCE = 1e-6
 #: Auto-timed plans and the "minimum feasible duration" search never stretch further.
 MAX_STRETCH = 1e4
+#: Most via points one request may carry (planning time grows with the count).
+MAX_VIA_POINTS = 1000
+#: Longest plan (and largest ``time_from_start``) accepted, seconds.
+MAX_DURATION = 3600.0
+#: Most samples one plan may have on ``~/trajectory`` (duration x rate_hz + 2).
+MAX_TRAJECTORY_POINTS = 200_000
+#: Most samples :func:`limit_violation` takes to locate a violation.
+MAX_CHECK_SAMPLES = 20_001
 
 
 class RequestError(ValueError):
@@ -260,6 +268,9 @@ def parse_via(joints: Sequence[str], names: Sequence[str],
     indices = _joint_indices(joints, names, 'via_points')
     if len(points) == 0:
         raise RequestError('via_points has no points: give at least one point')
+    if len(points) > MAX_VIA_POINTS:
+        raise RequestError(f'via_points has {len(points)} points, above the limit of '
+                           f'{MAX_VIA_POINTS}: split the path into several requests')
     count = len(names)
     positions, velocities, accelerations, times = [], [], [], []
     for number, (pos, vel, acc, time) in enumerate(points):
@@ -277,6 +288,9 @@ def parse_via(joints: Sequence[str], names: Sequence[str],
         positions.append(_finite_row(pos, names, f'{where} position'))
         if not math.isfinite(time) or time < 0.0:
             raise RequestError(f'{where} has time_from_start {time} s: must be >= 0')
+        if time > MAX_DURATION:
+            raise RequestError(f'{where} has time_from_start {time:g} s, above the limit of '
+                               f'{MAX_DURATION:g} s')
         times.append(time)
     for field, store in (('velocities', velocities), ('accelerations', accelerations)):
         if store and len(store) != len(points):
@@ -398,7 +412,7 @@ def limit_violation(plan: Plan, config: Config, acceleration: np.ndarray | None 
         if np.all(peak_velocity <= config.max_velocity * (1.0 + LIMIT_TOLERANCE)) and \
                 np.all(peak_acceleration <= a_limit * (1.0 + LIMIT_TOLERANCE)):
             return None
-    count = max(2001, int(plan.duration * config.rate_hz * 8) + 1)
+    count = min(max(2001, int(plan.duration * config.rate_hz * 8) + 1), MAX_CHECK_SAMPLES)
     times = np.linspace(0.0, plan.duration, count)
     _, velocity, accel = plan.sample(times)
     for what, values, limit, unit in (('velocity', velocity, config.max_velocity, 'rad/s'),
@@ -426,13 +440,39 @@ def _as_state(state: State) -> State:
     return State(*(np.asarray(part, dtype=float) for part in state))
 
 
+def check_size(motion: PlannedMotion, config: Config) -> PlannedMotion:
+    """
+    Refuse a plan longer than ``MAX_DURATION`` or with too many ``~/trajectory`` samples.
+
+    The bounds keep the published message and the time to build it finite; the reason
+    names the limit. Returns ``motion`` unchanged when it fits.
+    """
+    duration = motion.plan.duration
+    if not math.isfinite(duration) or duration > MAX_DURATION:
+        raise RequestError(f'the plan would last {duration:.4g} s, above the limit of '
+                           f'{MAX_DURATION:g} s: move a shorter distance or raise the limits')
+    samples = int(duration * config.rate_hz) + 2
+    if samples > MAX_TRAJECTORY_POINTS:
+        raise RequestError(f'the plan would have {samples} samples on ~/trajectory '
+                           f'({duration:.4g} s at {config.rate_hz:g} Hz), above the limit of '
+                           f'{MAX_TRAJECTORY_POINTS}: lower rate_hz or split the motion')
+    return motion
+
+
 def plan_goal(config: Config, state: State, hold: np.ndarray,
               request: GoalRequest) -> PlannedMotion:
     """
     Plan the synchronised minimum-time move from ``state`` to the goal.
 
     Joints the goal does not name go to ``hold`` (the end of the motion being replaced).
+    The plan is bounded by :func:`check_size`.
     """
+    with np.errstate(all='ignore'):
+        return check_size(_plan_goal(config, state, hold, request), config)
+
+
+def _plan_goal(config: Config, state: State, hold: np.ndarray,
+               request: GoalRequest) -> PlannedMotion:
     from traj_gen_ros.timing import min_time
 
     state = _as_state(state)
@@ -527,14 +567,21 @@ def plan_via(config: Config, state: State, hold: np.ndarray,
     Explicit times are kept; a plan that would break a limit is refused with the minimum
     feasible duration (all times scaled by one factor). Auto-timed requests take the
     per-segment durations from the limits, stretched uniformly if the start state needs it.
+    The plan is bounded by :func:`check_size`.
     """
+    with np.errstate(all='ignore'):
+        return check_size(_plan_via(config, state, hold, request), config)
+
+
+def _plan_via(config: Config, state: State, hold: np.ndarray,
+              request: ViaRequest) -> PlannedMotion:
     from traj_gen_ros.timing import via_durations
 
     state = _as_state(state)
     points, times, velocities, accelerations = via_points(config.joints, state, hold,
                                                           request)
     if len(points) == 1:  # only the start is left: come to rest there
-        return plan_goal(config, state, points[0], GoalRequest(np.zeros(0, int), np.zeros(0)))
+        return _plan_goal(config, state, points[0], GoalRequest(np.zeros(0, int), np.zeros(0)))
     profile = config.profile
     if profile == 'lspb' and (velocities is not None or accelerations is not None):
         raise RequestError('profile lspb takes the velocities at via points from the segment '
@@ -598,11 +645,13 @@ def _fit(build: Callable[[np.ndarray], Plan], durations: np.ndarray, config: Con
     if problem is None:
         return plan, 1.0
     high = 2.0
+    ceiling = min(MAX_STRETCH, MAX_DURATION / max(float(np.sum(durations)), 1e-300))
     while _try(build, durations * high, config, a_limit)[1] is not None:
         high *= 2.0
-        if high > MAX_STRETCH:
+        if high > ceiling:
             raise RequestError(f'{problem}; no uniform stretch of the times up to '
-                               f'x{MAX_STRETCH:g} meets the limits')
+                               f'x{ceiling:.4g} (at most {MAX_DURATION:g} s in all) meets '
+                               f'the limits')
     low = high / 2.0 if high > 2.0 else 1.0
     while high - low > 1e-4 * high:
         middle = 0.5 * (low + high)
