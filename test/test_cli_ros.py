@@ -94,6 +94,7 @@ def test_via_passes_the_points_then_plot_topic_records_the_plan(probe, rest, tmp
     status = json.loads(result.stdout)
     assert status['level'] == 'OK' and status['name'] == '/trajectory_generator'
     assert status['values']['request'] == 'via_points'
+    assert status['values']['frame_id'].startswith('traj-gen/')  # our request's token, echoed
     assert float(status['values']['duration']) == pytest.approx(2.0)
     position = position_after(probe, now_ns(probe))
     assert position[[0, 2]] == pytest.approx([0.5, 0.3], abs=1e-9)

@@ -11,7 +11,7 @@ boundary velocities) are one number for all joints or a comma list, one per join
 ``--durations`` (alias ``--duration``) gives one duration per segment. Joints are numbered
 from 0 (as in the solver's messages); points keep Craig's names from 1 (t1, θ̇12, t12).
 
-Exit codes: 0 success, 1 refused by the node, 2 bad arguments or a plan the solver
+Exit codes: 0 success, 1 not accepted by the node, 2 bad arguments or a plan the solver
 refuses, 3 no answer from ROS in time, 4 an internal error (a bug: please report it).
 Errors are one line on stderr.
 """

@@ -5,9 +5,10 @@ rclpy and the message packages are imported only inside these functions, so the 
 subcommands (and importing :mod:`traj_gen_ros.cli`) need no ROS at all.
 
 A status answers a request when it comes from the node (``name`` is its full name) after
-the request was published and its ``request`` value names the request's kind (``goal`` or
-``via_points``). The node's status carries no request id, so two clients sending the same
-kind of request at the same instant could take each other's answer.
+the request was published, its ``request`` value names the request's kind (``goal`` or
+``via_points``) and its ``frame_id`` value echoes the request's ``header.frame_id``, which
+``traj-gen`` sets to a token of its own (``traj-gen/<pid>/<random>``). A node that does not
+echo ``frame_id`` is matched on the kind alone.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import json
 import math
 import os
 import re
+import secrets
 import sys
 import time
 
@@ -159,16 +161,20 @@ def _status_dict(status: object) -> dict:
 
 def _request_message(args: argparse.Namespace) -> tuple[object, str, list[str], list[float]]:
     """Build the request; return it, its kind, the named joints and their final targets."""
+    token = f'traj-gen/{os.getpid()}/{secrets.token_hex(4)}'
     if args.command == 'goal':
         from sensor_msgs.msg import JointState
 
         names, positions = parse_goal(args.positions, args.degrees)
-        return JointState(name=names, position=positions), 'goal', names, positions
+        message = JointState(name=names, position=positions)
+        message.header.frame_id = token
+        return message, 'goal', names, positions
     from builtin_interfaces.msg import Duration
     from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
     points = parse_via(args.joints, args.points, args.degrees)
     message = JointTrajectory(joint_names=list(args.joints))
+    message.header.frame_id = token
     for positions, when in points:
         nanoseconds = int(round(when * 1e9))
         message.points.append(JointTrajectoryPoint(
@@ -205,9 +211,14 @@ def run_request(args: argparse.Namespace) -> int:
             seen = len(statuses)
             publisher.publish(message)
 
+            def ours(status: object) -> bool:
+                values = {pair.key: pair.value for pair in status.values}
+                return (status.name == node and values.get('request') == kind
+                        and values.get('frame_id', message.header.frame_id)
+                        == message.header.frame_id)
+
             def answer() -> object:
-                return next((s for s in statuses[seen:] if s.name == node and any(
-                    v.key == 'request' and v.value == kind for v in s.values)), None)
+                return next((s for s in statuses[seen:] if ours(s)), None)
 
             status = _status_dict(session.wait(answer, args.timeout,
                                                f'no {node}/status for the {kind} request'))
