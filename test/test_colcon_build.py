@@ -1,5 +1,6 @@
 """colcon (from PyPI) builds the package as ament_python; the installed executable runs."""
 
+import json
 import os
 from pathlib import Path
 import subprocess
@@ -44,6 +45,15 @@ def test_colcon_build_installs_a_runnable_ament_python_package(tmp_path):
     config = prefix / 'share' / 'traj_gen_ros' / 'config' / 'generator.yaml'
     assert config.is_file()
     assert not (REPO / 'build').exists() and not list(REPO.glob('*.egg-info'))
+
+    # The command-line tool is installed beside the node and runs from the install space.
+    traj_gen = prefix / 'lib' / 'traj_gen_ros' / 'traj-gen'
+    solved = subprocess.run(
+        ['bash', '-c', f'source {tmp_path / "install" / "setup.bash"} && exec {traj_gen} '
+         'solve cubic --points 15 75 --duration 3 --json'],
+        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=60)
+    assert solved.returncode == 0, solved.stderr
+    assert json.loads(solved.stdout)['coefficients'][0][0][2] == 20.0  # Craig's a2
 
     # What `ros2 run traj_gen_ros generator` does: source the workspace, run the script.
     script = f'source {tmp_path / "install" / "setup.bash"} && exec {generator} "$@"'
