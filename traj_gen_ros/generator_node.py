@@ -20,6 +20,7 @@ from __future__ import annotations
 import collections
 from collections.abc import Callable
 from dataclasses import dataclass
+import struct
 import sys
 import threading
 import time
@@ -39,6 +40,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from traj_gen_ros import planning
@@ -73,6 +75,35 @@ class _Request:
 
 def _descriptor(description: str, **extra: object) -> ParameterDescriptor:
     return ParameterDescriptor(description=description, **extra)
+
+
+def _peek_via_points(data: bytes) -> tuple[str, int]:
+    """
+    Read ``header.frame_id`` and the number of points of a CDR ``JointTrajectory``.
+
+    Layout after the 4-byte encapsulation header: stamp (2 x 4 bytes), ``frame_id``
+    (uint32 length with the NUL, bytes), ``joint_names`` (uint32 count, strings), then the
+    uint32 point count; each uint32 aligned to 4 from the end of the encapsulation header.
+    """
+    offset = 8
+
+    def string() -> str:
+        nonlocal offset
+        offset = (offset + 3) & ~3
+        (length,) = struct.unpack_from('<I', data, 4 + offset)
+        text = data[4 + offset + 4:4 + offset + 4 + max(length - 1, 0)]
+        offset += 4 + length
+        return text.decode('utf-8', 'replace')
+
+    frame_id = string()
+    offset = (offset + 3) & ~3
+    (names,) = struct.unpack_from('<I', data, 4 + offset)
+    offset += 4
+    for _ in range(names):
+        string()
+    offset = (offset + 3) & ~3
+    (count,) = struct.unpack_from('<I', data, 4 + offset)
+    return frame_id, count
 
 
 def _seconds(duration: Duration) -> float:
@@ -113,7 +144,10 @@ class TrajectoryGenerator(Node):
         self._status = self.create_publisher(
             DiagnosticStatus, '~/status', QoSProfile(depth=10, reliability=reliable))
         self.create_subscription(JointState, '~/goal', self._on_goal, 10)
-        self.create_subscription(JointTrajectory, '~/via_points', self._on_via_points, 10)
+        # Raw: the point count is read off the wire first, so a huge message is refused
+        # without building one Python object per point on the stream's thread.
+        self.create_subscription(JointTrajectory, '~/via_points', self._on_via_points_raw, 10,
+                                 raw=True)
         self.create_service(Trigger, '~/stop', self._on_stop)
         self._timer = self.create_timer(1.0 / self._config.rate_hz, self._publish_setpoint)
         self.add_on_set_parameters_callback(self._check_parameters)
@@ -229,6 +263,19 @@ class TrajectoryGenerator(Node):
                  hold: np.ndarray) -> planning.PlannedMotion:
             return planning.plan_goal(config, state, hold, request)
         self._submit(_Request('goal', values, 0, plan))
+
+    def _on_via_points_raw(self, data: bytes) -> None:
+        try:
+            frame_id, count = _peek_via_points(data)
+        except (IndexError, ValueError, struct.error):
+            frame_id, count = '', 0
+        if count > planning.MAX_VIA_POINTS:
+            self._report(DiagnosticStatus.ERROR, f'via_points refused: via_points has {count} '
+                         f'points, above the limit of {planning.MAX_VIA_POINTS}: split the '
+                         'path into several requests',
+                         self._request_values('via_points', frame_id))
+            return
+        self._on_via_points(deserialize_message(data, JointTrajectory))
 
     def _on_via_points(self, message: JointTrajectory) -> None:
         values = self._request_values('via_points', message.header.frame_id)
