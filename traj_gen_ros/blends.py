@@ -291,10 +291,12 @@ def _end_blend_time(
     Blend time at the first or last point, eq. (3) and (5): ``t_d - sqrt(t_d² - 2|Δθ|/θ̈)``.
 
     Evaluated as the equal ``(2|Δθ|/θ̈) / (t_d + sqrt(…))``, which does not cancel for tiny
-    steps.
+    steps. Where the blend cannot fit (negative discriminant) it is ``t_d``, the formula's
+    limit, so that the timing stays finite for the error report.
     """
-    return 2.0 * np.abs(step) / (acceleration * (duration + np.sqrt(np.maximum(discriminant,
-                                                                               0.0))))
+    root = np.sqrt(np.maximum(discriminant, 0.0))
+    return np.where(discriminant >= 0.0,
+                    2.0 * np.abs(step) / (acceleration * (duration + root)), duration)
 
 
 def _first_problem(

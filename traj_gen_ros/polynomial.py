@@ -40,6 +40,8 @@ _QUINTIC_MATRIX = np.array([
 _QUINTIC_ORDERS = np.array([0, 1, 2, 0, 1, 2])
 _QUINTIC_EXPONENTS = _QUINTIC_ORDERS[None, :] - np.arange(6)[:, None]
 
+# Shorter segments would overflow t_f**-5 (float64 reaches 1.8e308).
+_SHORTEST_SEGMENT = 1e-60
 # Above this many unknown via velocities the dense solve gives way to the O(n) sweep.
 _DENSE_SOLVE_LIMIT = 128
 
@@ -54,7 +56,10 @@ def cubic(
     """
     conditions = validation.per_joint_rows(q0=q0, v0=v0, qf=qf, vf=vf)
     duration = validation.duration_of(duration)
-    return _segments(_CUBIC_MATRIX, _CUBIC_EXPONENTS, conditions[None], np.array([duration]))
+    start = conditions[0].copy()
+    conditions[0], conditions[2] = 0.0, conditions[2] - start
+    return _segments(_CUBIC_MATRIX, _CUBIC_EXPONENTS, start[None], conditions[None],
+                     np.array([duration]))
 
 
 def quintic(
@@ -73,7 +78,10 @@ def quintic(
     """
     conditions = validation.per_joint_rows(q0=q0, v0=v0, a0=a0, qf=qf, vf=vf, af=af)
     duration = validation.duration_of(duration)
-    return _segments(_QUINTIC_MATRIX, _QUINTIC_EXPONENTS, conditions[None], np.array([duration]))
+    start = conditions[0].copy()
+    conditions[0], conditions[3] = 0.0, conditions[3] - start
+    return _segments(_QUINTIC_MATRIX, _QUINTIC_EXPONENTS, start[None], conditions[None],
+                     np.array([duration]))
 
 
 def cubic_via(
@@ -96,9 +104,10 @@ def cubic_via(
 
     """
     path, durations, point_velocities = _via_inputs(points, durations, velocities, v0)
-    boundary = np.stack(
-        [path[:-1], point_velocities[:-1], path[1:], point_velocities[1:]], axis=1)
-    return _segments(_CUBIC_MATRIX, _CUBIC_EXPONENTS, boundary, durations)
+    steps = np.diff(path, axis=0)
+    boundary = np.stack([np.zeros_like(steps), point_velocities[:-1], steps,
+                         point_velocities[1:]], axis=1)
+    return _segments(_CUBIC_MATRIX, _CUBIC_EXPONENTS, path[:-1], boundary, durations)
 
 
 def quintic_via(
@@ -123,11 +132,12 @@ def quintic_via(
         point_accelerations[0] = validation.per_joint_rows(a0=a0, like=path[0])[0]
     else:
         point_accelerations = validation.per_point('accelerations', accelerations, path.shape)
+    steps = np.diff(path, axis=0)
     boundary = np.stack([
-        path[:-1], point_velocities[:-1], point_accelerations[:-1],
-        path[1:], point_velocities[1:], point_accelerations[1:],
+        np.zeros_like(steps), point_velocities[:-1], point_accelerations[:-1],
+        steps, point_velocities[1:], point_accelerations[1:],
     ], axis=1)
-    return _segments(_QUINTIC_MATRIX, _QUINTIC_EXPONENTS, boundary, durations)
+    return _segments(_QUINTIC_MATRIX, _QUINTIC_EXPONENTS, path[:-1], boundary, durations)
 
 
 def heuristic_velocities(
@@ -225,21 +235,25 @@ def _mean_cubic_accelerations(
 
 
 def _segments(
-    matrix: np.ndarray, exponents: np.ndarray, boundary: np.ndarray, durations: np.ndarray
+    matrix: np.ndarray,
+    exponents: np.ndarray,
+    start: np.ndarray,
+    boundary: np.ndarray,
+    durations: np.ndarray,
 ) -> Trajectory:
     """
     Solve one polynomial per segment from its boundary conditions.
 
-    ``boundary`` is ``(segments, conditions, joints)`` in the matrix's column order, the
-    start position first; ``exponents[k, i] = order_i - k`` undoes the normalised-time
-    scaling. Positions are taken relative to each segment's start, so a joint that does
-    not move keeps exactly zero higher coefficients however short the segment.
+    ``start`` is each segment's start position ``(segments, joints)``; ``boundary`` holds
+    the conditions ``(segments, conditions, joints)`` in the matrix's column order with
+    positions relative to ``start`` (0 at the start, the step at the end), so a joint that
+    does not move keeps exactly zero higher coefficients however short the segment.
+    ``exponents[k, i] = order_i - k`` undoes the normalised-time scaling.
     """
-    start = boundary[:, 0].copy()
-    relative = boundary.copy()
-    relative[:, exponents[0] == 0] -= start[:, None]
-    with np.errstate(over='ignore', invalid='ignore'):
-        coefficients = (matrix * durations[:, None, None] ** exponents) @ relative
+    if durations.min() < _SHORTEST_SEGMENT:
+        raise ValueError(f'segment {int(np.argmin(durations))} lasts {durations.min():g} s: '
+                         f'polynomial segments must last at least {_SHORTEST_SEGMENT:g} s')
+    coefficients = (matrix * durations[:, None, None] ** exponents) @ boundary
     coefficients[:, 0] += start
     if not np.isfinite(coefficients).all():
         segment = int(np.argmin(np.isfinite(coefficients).all(axis=(1, 2))))
