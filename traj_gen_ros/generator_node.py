@@ -20,6 +20,7 @@ from __future__ import annotations
 import collections
 from collections.abc import Callable
 from dataclasses import dataclass
+import json
 import struct
 import sys
 import threading
@@ -41,6 +42,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
+from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from traj_gen_ros import planning
@@ -53,7 +55,7 @@ CONFIG_PARAMETERS = ('joints', 'rate_hz', 'profile', 'via_velocities', 'max_velo
                      'max_acceleration', 'lspb_acceleration')
 PER_JOINT = 'one value for all joints, or one per joint'
 #: The planner thread gets the GIL back this often (s) so the stream keeps its rate.
-SWITCH_INTERVAL = 0.0005
+SWITCH_INTERVAL = 0.0001
 #: Look-ahead of a new plan's start: at least this many stream periods ...
 LEAD_PERIODS = 2
 #: ... and this multiple of the slowest of the recent planning times, at most MAX_LEAD s.
@@ -61,6 +63,11 @@ LEAD_FACTOR = 2.0
 MAX_LEAD = 1.0
 #: A plan whose start the stream passed while it was planned is re-planned this often.
 PLAN_ATTEMPTS = 4
+#: The planner rests at least as long as it planned before it plans again (at most half of
+#: the GIL for planning while requests keep coming), and at least MIN_PLAN_GAP s.
+MIN_PLAN_GAP = 0.002
+#: Depth of the request subscriptions: a burst while the stream's thread waits is kept.
+REQUEST_DEPTH = 100
 
 
 @dataclass
@@ -142,19 +149,21 @@ class TrajectoryGenerator(Node):
             JointTrajectory, '~/trajectory',
             QoSProfile(depth=1, reliability=reliable, durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self._status = self.create_publisher(
-            DiagnosticStatus, '~/status', QoSProfile(depth=10, reliability=reliable))
-        self.create_subscription(JointState, '~/goal', self._on_goal, 10)
+            DiagnosticStatus, '~/status', QoSProfile(depth=REQUEST_DEPTH, reliability=reliable))
+        self._goal_subscription = self.create_subscription(
+            JointState, '~/goal', self._on_goal, REQUEST_DEPTH)
         # Raw: the point count is read off the wire first, so a huge message is refused
         # without building one Python object per point on the stream's thread.
-        self.create_subscription(JointTrajectory, '~/via_points', self._on_via_points_raw, 10,
-                                 raw=True)
+        self.create_subscription(JointTrajectory, '~/via_points', self._on_via_points_raw,
+                                 REQUEST_DEPTH, raw=True)
         self.create_service(Trigger, '~/stop', self._on_stop)
-        self._timer = self.create_timer(1.0 / self._config.rate_hz, self._publish_setpoint)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._trajectory_message(0, start)  # warm up the message imports
         self._planner = threading.Thread(target=self._run_planner, name='planner', daemon=True)
         self._planner.start()
+        self._stream = threading.Thread(target=self._run_stream, name='stream', daemon=True)
+        self._stream.start()
         self.get_logger().info(
             f'streaming {len(self._names)} joints at {self._config.rate_hz:g} Hz, '
             f'profile {self._config.profile}')
@@ -205,16 +214,42 @@ class TrajectoryGenerator(Node):
 
     def _apply_parameters(self, parameters: list[Parameter]) -> None:
         del parameters
-        rate = self._config.rate_hz
-        self._config = self._read_config()
-        if self._config.rate_hz != rate:
-            self.destroy_timer(self._timer)
-            self._timer = self.create_timer(1.0 / self._config.rate_hz, self._publish_setpoint)
+        self._config = self._read_config()  # the stream thread reads rate_hz every period
 
     # ------------------------------------------------------------------ stream
 
     def _now_ns(self) -> int:
         return self.get_clock().now().nanoseconds
+
+    def _run_stream(self) -> None:
+        """
+        Publish the setpoint every ``1/rate_hz`` s on the node clock, in its own thread.
+
+        Neither requests nor planning share its thread, so a flood of requests cannot delay
+        it beyond a GIL switch. A setpoint published by another thread (a plan's first)
+        re-phases it: the next one comes a period after that. Late ticks are not caught up.
+        """
+        clock = self.get_clock()
+        next_ns = clock.now().nanoseconds
+        while not self._closing and self.context.ok():
+            period_ns = int(1e9 / self._config.rate_hz)
+            next_ns += period_ns
+            try:
+                clock.sleep_until(Time(nanoseconds=next_ns, clock_type=clock.clock_type),
+                                  self.context)
+            except Exception:  # noqa: BLE001 - the context was shut down: the node ends
+                return
+            if self._closing:
+                return
+            with self._lock:
+                last_ns = self._last_published_ns
+            if last_ns > next_ns - period_ns // 2:  # another thread published just now
+                next_ns = last_ns
+                continue
+            self._publish_setpoint()
+            now_ns = clock.now().nanoseconds
+            if now_ns - next_ns > period_ns:  # fell behind: restart the phase from now
+                next_ns = now_ns
 
     def _publish_setpoint(self) -> None:
         with self._lock:  # the planner thread publishes too: keep the stamps in order
@@ -252,17 +287,31 @@ class TrajectoryGenerator(Node):
         return {'request': kind, 'request_id': str(self._received), 'frame_id': frame_id}
 
     def _on_goal(self, message: JointState) -> None:
+        parsed = [self._goal(message)]
+        # Drain the backlog in this one callback: only the newest can be planned, and one
+        # executor round per message would cost more than the parsing (a flood of goals).
+        with self._goal_subscription.handle:
+            for _ in range(REQUEST_DEPTH):
+                taken = self._goal_subscription.handle.take_message(JointState, False)
+                if taken is None:
+                    break
+                parsed.append(self._goal(taken[0]))
+        parsed = [request for request in parsed if request is not None]
+        if parsed:
+            self._submit(parsed[-1], parsed[:-1])
+
+    def _goal(self, message: JointState) -> _Request | None:
         values = self._request_values('goal', message.header.frame_id)
         try:
             request = planning.parse_goal(self._names, message.name, message.position)
         except planning.RequestError as error:
             self._report(DiagnosticStatus.ERROR, f'goal refused: {error}', values)
-            return
+            return None
 
         def plan(config: planning.Config, state: planning.State,
                  hold: np.ndarray) -> planning.PlannedMotion:
             return planning.plan_goal(config, state, hold, request)
-        self._submit(_Request('goal', values, 0, plan))
+        return _Request('goal', values, 0, plan)
 
     def _on_via_points_raw(self, data: bytes) -> None:
         try:
@@ -296,16 +345,28 @@ class TrajectoryGenerator(Node):
             return planning.plan_via(config, state, hold, request)
         self._submit(_Request('via_points', values, stamp_ns, plan))
 
-    def _submit(self, request: _Request) -> None:
+    def _submit(self, request: _Request, superseded: list[_Request] | None = None) -> None:
         with self._wake:
             older, self._inbox = self._inbox, request
             self._wake.notify()
-        if older is not None:
-            self._supersede(older, 'a newer request')
+        superseded = ([] if older is None else [older]) + (superseded or [])
+        if superseded:
+            self._supersede(superseded, 'a newer request')
 
-    def _supersede(self, request: _Request, by: str) -> None:
-        self._report(DiagnosticStatus.WARN, f'{request.kind} superseded by {by} before it was '
-                     'planned: not executed', request.values, log=False)
+    def _supersede(self, requests: list[_Request], by: str) -> None:
+        """Answer requests dropped unplanned: one status, listing them if several."""
+        if len(requests) == 1:
+            self._report(DiagnosticStatus.WARN, f'{requests[0].kind} superseded by {by} '
+                         'before it was planned: not executed', requests[0].values, log=False)
+            return
+        kinds = sorted({request.kind for request in requests})
+        self._report(DiagnosticStatus.WARN, f'{len(requests)} requests superseded by {by} '
+                     'before they were planned: not executed', {
+                         'request': ','.join(kinds), 'superseded': str(len(requests)),
+                         'request_ids': json.dumps([int(r.values['request_id'])
+                                                    for r in requests]),
+                         'frame_ids': json.dumps([r.values['frame_id'] for r in requests])},
+                     log=False)
 
     def _on_stop(self, request: Trigger.Request, response: Trigger.Response
                  ) -> Trigger.Response:
@@ -318,9 +379,8 @@ class TrajectoryGenerator(Node):
             self._schedule.splice(now_ns, motion, now_ns)
             self._version += 1
         if pending is not None:
-            self._supersede(pending, '~/stop')
+            self._supersede([pending], '~/stop')
         self._publish_setpoint()
-        self._rephase()
         with self._wake:
             self._outbox.append(('stop', now_ns, now_ns, motion, {'request': 'stop'}))
             self._wake.notify()
@@ -344,18 +404,15 @@ class TrajectoryGenerator(Node):
                 for kind, now_ns, start_ns, motion, values in outbox:
                     self._execute(kind, now_ns, start_ns, motion, values)
                 if request is not None:
+                    began = time.monotonic()
                     self._plan_request(request)
+                    rest = max(MIN_PLAN_GAP, time.monotonic() - began)
+                    with self._wake:
+                        self._wake.wait_for(lambda: self._closing or self._outbox, rest)
             except Exception as error:  # noqa: BLE001 - the planner must outlive any request
                 if self._closing or not self.context.ok():
                     return
                 self.get_logger().error(f'planner: unexpected failure: {error!r}')
-
-    def _rephase(self) -> None:
-        """Restart the stream period from now (the timer may be replaced concurrently)."""
-        try:
-            self._timer.reset()
-        except Exception:  # noqa: BLE001 - a rate change destroyed it: the new one runs
-            pass
 
     def _lead_ns(self, config: planning.Config) -> int:
         """Look-ahead of a new plan's start: a few periods, more if planning is slow."""
@@ -394,7 +451,7 @@ class TrajectoryGenerator(Node):
                     self._schedule.splice(start_ns, motion, self._now_ns())
                     self._version += 1
             if stopped:
-                self._supersede(request, '~/stop')
+                self._supersede([request], '~/stop')
                 return
             if spliced:
                 break
@@ -405,10 +462,9 @@ class TrajectoryGenerator(Node):
                          f'up to {lead_ns * 1e-9:.3f} s); resend it', request.values)
             return
         delayed = request.stamp_ns > now_ns + lead_ns
-        if not delayed:  # the new motion's first setpoint goes out as it starts
+        if not delayed and self._inbox is None:  # its first setpoint goes out as it starts
             time.sleep(max(0.0, min(start_ns - self._now_ns(), MAX_LEAD * 1e9) * 1e-9))
             self._publish_setpoint()
-            self._rephase()
         self._execute(request.kind, now_ns, start_ns, motion, request.values, delayed)
 
     def _execute(self, kind: str, now_ns: int, start_ns: int,
@@ -441,6 +497,7 @@ class TrajectoryGenerator(Node):
             self._closing = True
             self._wake.notify()
         self._planner.join(timeout=10.0)
+        self._stream.join(timeout=2.0)
         super().destroy_node()
 
 
