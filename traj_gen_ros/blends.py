@@ -90,7 +90,7 @@ def single_segment(
     rest; the line between them ends at ``goal - vc t_b/2``, so the goal is met exactly.
     """
     displacement = goal - start
-    if start_velocity.any():
+    if np.count_nonzero(start_velocity):
         cruise = _moving_start_cruise(displacement, duration, acceleration, start_velocity)
         first_blend = np.abs(cruise - start_velocity) / acceleration
         last_blend = np.abs(cruise) / acceleration
@@ -125,11 +125,12 @@ def three_pieces(
     breakpoints[2], breakpoints[3] = duration - last_blend, duration
     coefficients = np.zeros((3, 3, start.size))
     coefficients[0, 0], coefficients[0, 1] = start, start_velocity
-    coefficients[0, 2] = 0.5 * blend_accelerations[0]
+    coefficients[0, 2] = blend_accelerations[0]
+    coefficients[2, 2] = blend_accelerations[1]
+    coefficients[:, 2] *= 0.5
     coefficients[1, 0] = start + 0.5 * (start_velocity + cruise) * first_blend
     coefficients[1, 1] = coefficients[2, 1] = cruise
     coefficients[2, 0] = goal - 0.5 * cruise * last_blend
-    coefficients[2, 2] = 0.5 * blend_accelerations[1]
     return BlendedTrajectory(breakpoints, coefficients)
 
 
@@ -188,7 +189,7 @@ def _rest_start_blend_time(
     """
     room = duration**2 - 4.0 * np.abs(displacement) / acceleration
     too_low = room < -_FEASIBILITY_TOLERANCE * duration**2
-    if too_low.any():
+    if np.count_nonzero(too_low):
         joint = int(np.argmax(too_low))
         minimum = 4.0 * abs(displacement[joint]) / duration**2
         raise ValueError(

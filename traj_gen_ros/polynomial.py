@@ -255,7 +255,7 @@ def _segments(
                          f'polynomial segments must last at least {_SHORTEST_SEGMENT:g} s')
     coefficients = (matrix * durations[:, None, None] ** exponents) @ boundary
     coefficients[:, 0] += start
-    if not np.isfinite(coefficients).all():
+    if not validation.every(np.isfinite(coefficients)):
         segment = int(np.argmin(np.isfinite(coefficients).all(axis=(1, 2))))
         raise ValueError(f'segment {segment} lasts {durations[segment]:g} s, too short for its '
                          'boundary conditions: its coefficients overflow; give a longer '

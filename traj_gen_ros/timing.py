@@ -70,13 +70,14 @@ def min_time(
         'max_acceleration', max_acceleration, joint_count)
     if profile not in PROFILES:
         raise ValueError(f'profile must be one of {", ".join(PROFILES)}, got "{profile}"')
-    if start_velocity.any() or start_acceleration.any():
+    if np.count_nonzero(start_velocity) or np.count_nonzero(start_acceleration):
         return _moving_min_time(
             start, goal, max_velocity, max_acceleration, profile, start_velocity,
             start_acceleration)
-    distance = np.abs(goal - start)
+    displacement = goal - start
+    distance = np.abs(displacement)
     if profile == 'lspb':
-        return _min_time_lspb(start, goal, distance, max_velocity, max_acceleration)
+        return _min_time_lspb(start, goal, displacement, max_velocity, max_acceleration)
     joint_times = rest_to_rest_times(distance, max_velocity, max_acceleration, profile)
     duration = float(joint_times.max())
     if duration == 0.0:
@@ -88,7 +89,7 @@ def min_time(
 def _min_time_lspb(
     start: np.ndarray,
     goal: np.ndarray,
-    distance: np.ndarray,
+    displacement: np.ndarray,
     max_velocity: np.ndarray,
     max_acceleration: np.ndarray,
 ) -> Trajectory:
@@ -99,16 +100,17 @@ def _min_time_lspb(
     reached), duration ``T_j = D/v_p + v_p/a_max``, blend time ``v_p/a_max``. Stretching
     by ``k = T/T_j`` gives blend ``k v_p/a_max``, cruise ``v_p/k``, acceleration ``a_max/k²``.
     """
+    distance = np.abs(displacement)
     peak = np.minimum(max_velocity, np.sqrt(distance * max_acceleration))
     moving = peak > 0.0
     ramp = peak / max_acceleration
     joint_times = distance / np.where(moving, peak, 1.0) + ramp
-    duration = float(joint_times.max())
+    duration = max(joint_times.tolist())
     if duration == 0.0:
         return hold(start)
     shrink = np.where(moving, joint_times, duration) / duration  # 1/k
     blend = ramp / shrink
-    acceleration = np.sign(goal - start) * max_acceleration * shrink**2
+    acceleration = np.sign(displacement) * max_acceleration * (shrink * shrink)
     return three_pieces(start, goal, duration, (blend, blend), acceleration * blend, 0.0,
                         (acceleration, -acceleration))
 

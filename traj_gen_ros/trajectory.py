@@ -64,7 +64,7 @@ class Trajectory:
         coefficients and runs Horner's rule on all of them at once.
         """
         times = np.asarray(times, dtype=float).reshape(-1)
-        if not np.isfinite(times).all():
+        if np.count_nonzero(np.isfinite(times)) != times.size:
             raise ValueError(f'times must be finite: sample {np.argmin(np.isfinite(times))} '
                              f'is {times[np.argmin(np.isfinite(times))]}')
         times = np.clip(times, 0.0, self.duration)

@@ -14,6 +14,16 @@ import numpy as np
 ArrayLike = float | Sequence[float] | np.ndarray
 
 
+def every(mask: np.ndarray) -> bool:
+    """
+    Tell whether every entry of a boolean array is true.
+
+    ``np.count_nonzero`` skips the ufunc-reduction set-up of ``mask.all()``: on the few
+    joints of a plan it is several times faster, and a node may plan at kHz rates.
+    """
+    return np.count_nonzero(mask) == mask.size
+
+
 def _describe_bad(values: np.ndarray, item: str = 'joint') -> str:
     """Name the first non-finite entry (index and value); ``item`` names a 1-D index."""
     index = tuple(int(i) for i in np.argwhere(~np.isfinite(values))[0])
@@ -35,7 +45,7 @@ def finite_array(name: str, value: ArrayLike, max_ndim: int, item: str = 'joint'
         raise ValueError(f'{name} must be numbers: {error}') from None
     if array.ndim > max_ndim:
         raise ValueError(f'{name} has {array.ndim} dimensions; at most {max_ndim} allowed')
-    if not np.isfinite(array).all():
+    if not every(np.isfinite(array)):
         raise ValueError(f'{name} must be finite: {_describe_bad(array, item)}')
     return array
 
@@ -71,15 +81,19 @@ def positive_per_joint(name: str, value: ArrayLike, joint_count: int) -> np.ndar
         if not 0.0 < value < np.inf:
             raise ValueError(f'{name} must be finite and > 0, got {value}')
         return np.full(joint_count, float(value))
-    array = finite_array(name, value, max_ndim=1)
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f'{name} must be numbers: {error}') from None
     if array.ndim == 0:
         return positive_per_joint(name, float(array), joint_count)
-    if array.size != joint_count:
-        raise ValueError(f'{name} has {array.size} values for {joint_count} joints; '
+    if array.shape != (joint_count,):
+        raise ValueError(f'{name} is shaped {array.shape} for {joint_count} joints; '
                          'give one value, or one per joint')
-    if not (array > 0.0).all():
-        joint = int(np.argmin(array > 0.0))
-        raise ValueError(f'{name} must be > 0; joint {joint} has {array[joint]}')
+    valid = (array > 0.0) & (array < np.inf)
+    if not every(valid):
+        joint = int(np.argmin(valid))
+        raise ValueError(f'{name} must be finite and > 0; joint {joint} has {array[joint]}')
     return array
 
 
@@ -144,7 +158,7 @@ def per_joint_rows(like: np.ndarray | None = None, **values: ArrayLike) -> np.nd
     rows = np.empty((len(arrays), sizes.pop() if sizes else 1))
     for row, array in enumerate(arrays):
         rows[row] = array
-    if not np.isfinite(rows).all():
+    if not every(np.isfinite(rows)):
         for name, array in zip(values, arrays, strict=True):
             finite_array(name, array, max_ndim=1)
     return rows
