@@ -13,7 +13,9 @@ Usage: python benchmarks/flood.py [--rate 500] [--requests 1000] [--seconds 10] 
 
 import argparse
 import json
+import os
 from pathlib import Path
+import subprocess
 import sys
 import time
 
@@ -25,12 +27,13 @@ from node_harness import (  # noqa: E402
     JOINTS,
     MAX_ACCELERATION,
     MAX_VELOCITY,
+    node_env,
     NodeProcess,
-    Probe,
     stamp_ns,
 )
 import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
+from rclpy.node import Node  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 
@@ -43,6 +46,22 @@ def rss_kib(pid: int) -> int:
     raise RuntimeError(f'no VmRSS for {pid}')
 
 
+def node_pid(parent: int | None = None, marker: bytes = b'generator_node') -> int:
+    """Pid of the child of ``parent`` (default: this process) whose command has ``marker``."""
+    parent = os.getpid() if parent is None else parent
+    for entry in Path('/proc').iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            ppid = int((entry / 'stat').read_text().rsplit(')', 1)[1].split()[1])
+            command = (entry / 'cmdline').read_bytes()
+        except (OSError, IndexError, ValueError):
+            continue
+        if ppid == parent and marker in command:
+            return int(entry.name)
+    raise RuntimeError(f'no child process of {parent} running {marker!r}')
+
+
 def answered(status: DiagnosticStatus) -> dict:
     """Map each request a status answers (by frame_id) to (status, request_id)."""
     values = {kv.key: kv.value for kv in status.values}
@@ -53,15 +72,16 @@ def answered(status: DiagnosticStatus) -> dict:
     return {values.get('frame_id'): (status, int(values.get('request_id', -1)))}
 
 
-def goal(k: int, seconds: float) -> JointState:
-    """The k-th goal: every joint somewhere new, within +-1 rad."""
+def goal(k: int) -> JointState:
+    """Make the k-th goal: every joint somewhere new, within +-1 rad."""
     phase = np.arange(6) * 0.7 + k * 0.013
     message = JointState(name=JOINTS, position=np.round(np.sin(phase) * 0.9, 6).tolist())
     message.header.frame_id = f'flood-{k}'
     return message
 
 
-def flood(probe: Probe, request_hz: float, seconds: float, tag: str) -> tuple[int, float]:
+def flood(node: Node, publisher, request_hz: float, seconds: float, tag: str
+          ) -> tuple[int, float]:
     """Publish goals on a fixed schedule, spinning in between; return (sent, elapsed)."""
     period = 1.0 / request_hz
     began = time.monotonic()
@@ -72,95 +92,171 @@ def flood(probe: Probe, request_hz: float, seconds: float, tag: str) -> tuple[in
             break
         due = int(elapsed / period) + 1
         while sent < due:
-            message = goal(sent, seconds)
+            message = goal(sent)
             message.header.frame_id = f'{tag}-{sent}'
-            probe.goal_pub.publish(message)
+            publisher.publish(message)
             sent += 1
-        rclpy.spin_once(probe, timeout_sec=max(0.0, due * period - elapsed))
+        rclpy.spin_once(node, timeout_sec=max(0.0, due * period - elapsed))
     return sent, time.monotonic() - began
+
+
+def flooder(tag: str, request_hz: float, seconds: float) -> dict:
+    """
+    Send the goals from this process and collect every answer (the ``--flooder`` role).
+
+    A separate process from the stream recorder, so that neither starves the other.
+    """
+    # node_harness picked a domain from this pid on import: use the recorder's instead.
+    os.environ['ROS_DOMAIN_ID'] = os.environ['FLOOD_DOMAIN_ID']
+    rclpy.init()
+    node = Node(f'flooder_{os.getpid()}')
+    statuses = {}
+    reliable = ReliabilityPolicy.RELIABLE
+    node.create_subscription(DiagnosticStatus, '/trajectory_generator/status',
+                             lambda status: statuses.update(answered(status)),
+                             QoSProfile(depth=20000, reliability=reliable))
+    publisher = node.create_publisher(JointState, '/trajectory_generator/goal',
+                                      QoSProfile(depth=1000, reliability=reliable))
+    deadline = time.monotonic() + 20.0
+    while not (publisher.get_subscription_count() and
+               node.count_publishers('/trajectory_generator/status')):
+        rclpy.spin_once(node, timeout_sec=0.01)
+        if time.monotonic() > deadline:
+            raise RuntimeError('the generator did not match')
+    sent, elapsed = flood(node, publisher, request_hz, seconds, tag)
+    last = f'{tag}-{sent - 1}'
+    deadline = time.monotonic() + 30.0
+    while last not in statuses and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.01)
+    node.destroy_node()
+    rclpy.shutdown()
+    answers = [statuses.get(f'{tag}-{k}', (None, None)) for k in range(sent)]
+    ids = sorted(i for _, i in answers if i is not None)
+    levels = {'accepted': DiagnosticStatus.OK, 'superseded': DiagnosticStatus.WARN,
+              'refused': DiagnosticStatus.ERROR}
+    counts = {name: sum(1 for a, _ in answers if a is not None and a.level == level)
+              for name, level in levels.items()}
+    counts['unanswered'] = sum(1 for a, _ in answers if a is None)
+    counts['lost_before_the_node'] = counts['unanswered'] - (ids[-1] - ids[0] + 1 - len(ids))
+    last_status = statuses.get(last, (None, None))[0]
+    return {'requests_sent': sent, 'request_hz_achieved': round(sent / elapsed, 1),
+            **counts, 'status_messages': len({id(a) for a, _ in answers if a is not None}),
+            'last_request': None if last_status is None else {
+                'level': int.from_bytes(last_status.level, 'little'),
+                'message': last_status.message},
+            'newest_goal': list(goal(sent - 1).position)}
+
+
+class Recorder(Node):
+    """Record the stream only (stamp, position, velocity), so that it keeps up."""
+
+    def __init__(self) -> None:
+        super().__init__(f'recorder_{os.getpid()}')
+        self.rows: list[tuple[int, list, list]] = []
+        self.create_subscription(
+            JointState, '/joint_states',
+            lambda m: self.rows.append((stamp_ns(m.header.stamp), m.position, m.velocity)),
+            QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+
+    def spin_until(self, condition, timeout: float, what: str) -> None:
+        """Spin until ``condition()``; raise after ``timeout`` s."""
+        deadline = time.monotonic() + timeout
+        while not condition():
+            if time.monotonic() > deadline:
+                raise RuntimeError(f'timed out waiting for {what}')
+            rclpy.spin_once(self, timeout_sec=0.01)
+
+    def wait_at_rest(self, timeout: float) -> np.ndarray:
+        """Wait for ten identical zero-velocity samples; return the position."""
+        def resting() -> bool:
+            tail = self.rows[-10:]
+            return len(tail) == 10 and all(not any(v) for _, _, v in tail) and \
+                len({tuple(q) for _, q, _ in tail}) == 1
+        self.spin_until(resting, timeout, 'the stream to hold still')
+        return np.array(self.rows[-1][1])
+
+
+def run_flooder(recorder: Recorder, tag: str, request_hz: float, seconds: float) -> dict:
+    """Run the flooder in its own process while ``recorder`` records the stream."""
+    process = subprocess.Popen(
+        [sys.executable, __file__, '--flooder', tag, '--requests', str(request_hz),
+         '--seconds', str(seconds)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+        env={**node_env(), 'FLOOD_DOMAIN_ID': os.environ['ROS_DOMAIN_ID']}, text=True)
+    try:
+        recorder.spin_until(lambda: process.poll() is not None, seconds + 90.0, 'the flooder')
+        output = process.stdout.read()
+    finally:
+        if process.poll() is None:
+            process.kill()
+        process.wait()
+        process.stdout.close()
+    if process.returncode != 0:
+        raise RuntimeError(f'the flooder failed: {output}')
+    return json.loads(output.strip().splitlines()[-1])
 
 
 def run(rate_hz: float = 500.0, request_hz: float = 1000.0, seconds: float = 10.0) -> dict:
     """Start a node at ``rate_hz``, flood it, return the figures (see module docstring)."""
     rclpy.init()
-    node = NodeProcess('-p', f'rate_hz:={rate_hz}')
-    probe = None
+    generator = NodeProcess('-p', f'rate_hz:={rate_hz}')
     try:
-        probe = Probe(name='flood')
-        statuses = {}
-        probe.create_subscription(
-            DiagnosticStatus, '/trajectory_generator/status',
-            lambda status: statuses.update(answered(status)),
-            QoSProfile(depth=20000, reliability=ReliabilityPolicy.RELIABLE))
-        probe.wait_ready()
+        recorder = Recorder()
+        recorder.spin_until(lambda: len(recorder.rows) > 10, 30.0, 'the stream')
+        pid = generator.process.pid
         # Warm up (imports, first plans), then measure from rest.
-        warm, _ = flood(probe, 200.0, 1.0, 'warm')
-        probe.spin_until(lambda: f'warm-{warm - 1}' in statuses, 20.0, 'the warm-up')
-        probe.wait_at_rest(timeout=30.0)
-        idle_first = len(probe.states)
-        probe.spin_until(lambda: len(probe.states) >= idle_first + int(2 * rate_hz), 10.0,
-                         'two idle seconds')
-        idle = np.diff([stamp_ns(s.header.stamp) * 1e-9 for s in probe.states[idle_first:]])
-        rss_before = rss_kib(node.process.pid)
-        first = len(probe.states)
-        start_ns = probe.get_clock().now().nanoseconds
-        sent, elapsed = flood(probe, request_hz, seconds, 'flood')
-        end_ns = probe.get_clock().now().nanoseconds
-        last = f'flood-{sent - 1}'
-        probe.spin_until(lambda: last in statuses, 30.0, 'the last status')
-        final = probe.wait_at_rest(timeout=30.0)
-        rss_after = rss_kib(node.process.pid)
-        alive = node.process.poll() is None
+        run_flooder(recorder, 'warm', 200.0, 1.0)
+        recorder.wait_at_rest(timeout=30.0)
+        idle_first = len(recorder.rows)
+        recorder.spin_until(lambda: len(recorder.rows) >= idle_first + int(2 * rate_hz),
+                            10.0, 'two idle seconds')
+        idle = np.diff([row[0] for row in recorder.rows[idle_first:]]) * 1e-9
+        worker = node_pid(pid, b'spawn_main')  # the planning process
+        rss_before = rss_kib(pid)
+        worker_before = rss_kib(worker)
+        first = len(recorder.rows)
+        start_ns = recorder.get_clock().now().nanoseconds
+        figures = run_flooder(recorder, 'flood', request_hz, seconds)
+        end_ns = start_ns + int(seconds * 1e9)
+        final = recorder.wait_at_rest(timeout=30.0)
+        rss_after = rss_kib(pid)
+        worker_after = rss_kib(worker)
+        recorder.destroy_node()
     finally:
-        if probe is not None:
-            probe.destroy_node()
         rclpy.shutdown()
-        code = node.stop()
-        output = node.output()
-        node.close()
-    states = [s for s in probe.states[first:]
-              if start_ns <= stamp_ns(s.header.stamp) <= end_ns]
-    stamps = np.array([stamp_ns(s.header.stamp) for s in probe.states[first:]]) * 1e-9
-    q = np.array([s.position for s in probe.states[first:]])
-    v = np.array([s.velocity for s in probe.states[first:]])
+        code = generator.stop()
+        output = generator.output()
+        generator.close()
+    rows = recorder.rows[first:]
+    stamps = np.array([row[0] for row in rows]) * 1e-9
+    q = np.array([row[1] for row in rows])
+    v = np.array([row[2] for row in rows])
+    window = (stamps >= start_ns * 1e-9) & (stamps <= end_ns * 1e-9)
     steps = np.diff(stamps)
-    during = np.diff(np.array([stamp_ns(s.header.stamp) for s in states]) * 1e-9)
+    during = np.diff(stamps[window])
     position_step = (np.abs(np.diff(q, axis=0)) / (MAX_VELOCITY * steps[:, None])).max()
     velocity_step = (np.abs(np.diff(v, axis=0)) / (MAX_ACCELERATION * steps[:, None])).max()
-    answers = [statuses.get(f'flood-{k}', (None, None)) for k in range(sent)]
-    ids = sorted(i for _, i in answers if i is not None)
-    answers = [status for status, _ in answers]
-    batches = len({id(a) for a in answers if a is not None})
-    levels = {'accepted': DiagnosticStatus.OK, 'superseded': DiagnosticStatus.WARN,
-              'refused': DiagnosticStatus.ERROR}
-    counts = {name: sum(1 for a in answers if a is not None and a.level == level)
-              for name, level in levels.items()}
-    counts['unanswered'] = sum(1 for a in answers if a is None)
-    counts['lost_before_the_node'] = counts['unanswered'] - (ids[-1] - ids[0] + 1 - len(ids))
-    newest = np.array(goal(sent - 1, seconds).position)
-    last_status = statuses[last][0]
+    newest = np.array(figures.pop('newest_goal'))
     return {
         'rate_hz': rate_hz, 'request_hz_target': request_hz, 'seconds': seconds,
-        'requests_sent': sent, 'request_hz_achieved': round(sent / elapsed, 1),
-        **counts, 'status_messages': batches,
-        'last_request': {'level': int.from_bytes(last_status.level, 'little'),
-                         'message': last_status.message},
+        **figures,
         'final_is_newest_goal': bool(np.allclose(final, newest, atol=1e-12)),
         'period_ms': {'nominal': round(1e3 / rate_hz, 3),
+                      'mean': round(float(during.mean()) * 1e3, 3),
                       'p50': round(float(np.percentile(during, 50)) * 1e3, 3),
                       'p99': round(float(np.percentile(during, 99)) * 1e3, 3),
                       'max': round(float(during.max()) * 1e3, 3),
                       'idle_p50': round(float(np.percentile(idle, 50)) * 1e3, 3),
                       'idle_p99': round(float(np.percentile(idle, 99)) * 1e3, 3),
                       'idle_max': round(float(idle.max()) * 1e3, 3)},
-        'samples_during_flood': len(states),
+        'samples_during_flood': int(window.sum()),
         'max_position_step_vs_limit': round(float(position_step), 4),
         'max_velocity_step_vs_limit': round(float(velocity_step), 4),
         'finite': bool(np.isfinite(q).all() and np.isfinite(v).all()),
         'rss_kib': {'before': rss_before, 'after': rss_after,
                     'growth': rss_after - rss_before},
-        'node_alive_after': alive, 'exit_code': code,
-        'traceback': 'Traceback' in output,
+        'worker_rss_kib': {'before': worker_before, 'after': worker_after,
+                           'growth': worker_after - worker_before},
+        'exit_code': code, 'traceback': 'Traceback' in output,
     }
 
 
@@ -170,7 +266,11 @@ def main() -> None:
     parser.add_argument('--requests', type=float, default=1000.0, help='goals per second')
     parser.add_argument('--seconds', type=float, default=10.0, help='flood length')
     parser.add_argument('--json', action='store_true', help='print JSON only')
+    parser.add_argument('--flooder', metavar='TAG', help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.flooder:
+        print(json.dumps(flooder(args.flooder, args.requests, args.seconds)))
+        return
     figures = run(args.rate, args.requests, args.seconds)
     if args.json:
         print(json.dumps(figures, indent=2))
@@ -186,7 +286,8 @@ def main() -> None:
           f"p99 {period['p99']}, max {period['max']} (idle before: p50 {period['idle_p50']}, "
           f"p99 {period['idle_p99']}, max {period['idle_max']})")
     print(f"  RSS KiB: before {figures['rss_kib']['before']}, after "
-          f"{figures['rss_kib']['after']} (growth {figures['rss_kib']['growth']})")
+          f"{figures['rss_kib']['after']} (growth {figures['rss_kib']['growth']}); planning "
+          f"worker {figures['worker_rss_kib']['before']} -> {figures['worker_rss_kib']['after']}")
     print(f"  largest step / limit: position {figures['max_position_step_vs_limit']}, "
           f"velocity {figures['max_velocity_step_vs_limit']}; final is the newest goal: "
           f"{figures['final_is_newest_goal']}")

@@ -18,9 +18,9 @@ Interface (all names relative, so namespaces and remapping work):
 from __future__ import annotations
 
 import collections
-from collections.abc import Callable
 from dataclasses import dataclass
 import json
+import multiprocessing
 import struct
 import sys
 import threading
@@ -66,18 +66,20 @@ PLAN_ATTEMPTS = 4
 #: The planner rests at least as long as it planned before it plans again (at most half of
 #: the GIL for planning while requests keep coming), and at least MIN_PLAN_GAP s.
 MIN_PLAN_GAP = 0.002
+#: A request whose planning takes longer is refused (the worker process is replaced).
+PLAN_TIMEOUT = 5.0
 #: Depth of the request subscriptions: a burst while the stream's thread waits is kept.
-REQUEST_DEPTH = 100
+REQUEST_DEPTH = 1000
 
 
 @dataclass
 class _Request:
-    """A parsed request waiting for the planner; ``plan`` plans it from a state."""
+    """A parsed request waiting for the planner."""
 
     kind: str
     values: dict[str, str]
     stamp_ns: int
-    plan: Callable[[planning.Config, planning.State, np.ndarray], planning.PlannedMotion]
+    request: planning.GoalRequest | planning.ViaRequest
 
 
 def _descriptor(description: str, **extra: object) -> ParameterDescriptor:
@@ -160,6 +162,7 @@ class TrajectoryGenerator(Node):
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._trajectory_message(0, start)  # warm up the message imports
+        self._start_worker()
         self._planner = threading.Thread(target=self._run_planner, name='planner', daemon=True)
         self._planner.start()
         self._stream = threading.Thread(target=self._run_stream, name='stream', daemon=True)
@@ -307,11 +310,7 @@ class TrajectoryGenerator(Node):
         except planning.RequestError as error:
             self._report(DiagnosticStatus.ERROR, f'goal refused: {error}', values)
             return None
-
-        def plan(config: planning.Config, state: planning.State,
-                 hold: np.ndarray) -> planning.PlannedMotion:
-            return planning.plan_goal(config, state, hold, request)
-        return _Request('goal', values, 0, plan)
+        return _Request('goal', values, 0, request)
 
     def _on_via_points_raw(self, data: bytes) -> None:
         try:
@@ -339,11 +338,7 @@ class TrajectoryGenerator(Node):
             return
         stamp = message.header.stamp
         stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # may be negative: "now"
-
-        def plan(config: planning.Config, state: planning.State,
-                 hold: np.ndarray) -> planning.PlannedMotion:
-            return planning.plan_via(config, state, hold, request)
-        self._submit(_Request('via_points', values, stamp_ns, plan))
+        self._submit(_Request('via_points', values, stamp_ns, request))
 
     def _submit(self, request: _Request, superseded: list[_Request] | None = None) -> None:
         with self._wake:
@@ -414,6 +409,32 @@ class TrajectoryGenerator(Node):
                     return
                 self.get_logger().error(f'planner: unexpected failure: {error!r}')
 
+    def _start_worker(self) -> None:
+        """Start the planning process (spawned: no ROS state is copied) and warm it up."""
+        context = multiprocessing.get_context('spawn')
+        self._worker = context.Pool(1, initializer=planning.worker_init)
+        self._worker.apply_async(planning.worker_init)
+
+    def _plan_in_worker(self, config: planning.Config, state: planning.State,
+                        hold: np.ndarray, request: planning.GoalRequest | planning.ViaRequest
+                        ) -> planning.PlannedMotion:
+        """
+        Plan in the worker process, so planning never holds this process's GIL.
+
+        A plan that takes longer than ``PLAN_TIMEOUT`` s is refused and the worker replaced.
+        """
+        pending = self._worker.apply_async(planning.plan_request,
+                                           (config, state, hold, request))
+        try:
+            return pending.get(PLAN_TIMEOUT)
+        except multiprocessing.TimeoutError:
+            self._worker.terminate()
+            if not self._closing:
+                self._start_worker()
+            raise planning.RequestError(
+                f'planning took longer than {PLAN_TIMEOUT:g} s (the limit): send fewer via '
+                'points or a shorter motion') from None
+
     def _lead_ns(self, config: planning.Config) -> int:
         """Look-ahead of a new plan's start: a few periods, more if planning is slow."""
         lead = max(LEAD_PERIODS / config.rate_hz, LEAD_FACTOR * max(self._plan_times))
@@ -431,7 +452,7 @@ class TrajectoryGenerator(Node):
                 hold = self._schedule.end_position(start_ns)
             began = time.perf_counter()
             try:
-                motion = request.plan(config, state, hold)
+                motion = self._plan_in_worker(config, state, hold, request.request)
             except planning.RequestError as error:
                 self._report(DiagnosticStatus.ERROR, f'{request.kind} refused: {error}',
                              request.values)
@@ -496,6 +517,7 @@ class TrajectoryGenerator(Node):
         with self._wake:
             self._closing = True
             self._wake.notify()
+        self._worker.terminate()
         self._planner.join(timeout=10.0)
         self._stream.join(timeout=2.0)
         super().destroy_node()

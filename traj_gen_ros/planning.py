@@ -644,15 +644,16 @@ def _fit(build: Callable[[np.ndarray], Plan], durations: np.ndarray, config: Con
     plan, problem = _try(build, durations, config, a_limit)
     if problem is None:
         return plan, 1.0
-    high = 2.0
+    # Feasibility is not monotonic in the stretch when the start accelerates (a long plan
+    # keeps a0 too long): scan in steps of 1.25 up to x16, then double, up to the ceiling.
     ceiling = min(MAX_STRETCH, MAX_DURATION / max(float(np.sum(durations)), 1e-300))
+    low, high = 1.0, 1.25
     while _try(build, durations * high, config, a_limit)[1] is not None:
-        high *= 2.0
+        low, high = high, high * (1.25 if high < 16.0 else 2.0)
         if high > ceiling:
             raise RequestError(f'{problem}; no uniform stretch of the times up to '
                                f'x{ceiling:.4g} (at most {MAX_DURATION:g} s in all) meets '
                                f'the limits')
-    low = high / 2.0 if high > 2.0 else 1.0
     while high - low > 1e-4 * high:
         middle = 0.5 * (low + high)
         if _try(build, durations * middle, config, a_limit)[1] is None:
@@ -666,6 +667,29 @@ def _fit(build: Callable[[np.ndarray], Plan], durations: np.ndarray, config: Con
                            f'scaled by {high:.4g})')
     plan, _ = _try(build, durations * high, config, a_limit)
     return plan, high
+
+
+def plan_request(config: Config, state: State, hold: np.ndarray,
+                 request: GoalRequest | ViaRequest) -> PlannedMotion:
+    """Plan a parsed goal or via-point request (the node's worker process runs this)."""
+    if isinstance(request, GoalRequest):
+        return plan_goal(config, state, hold, request)
+    return plan_via(config, state, hold, request)
+
+
+def worker_init() -> None:
+    """
+    Set up a planning worker process.
+
+    Ctrl-C is for the node (which ends the worker); the worker runs at a lower priority
+    (nice +10) than the node, so on a busy machine the stream is scheduled first.
+    """
+    import os
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if os.getpriority(os.PRIO_PROCESS, 0) < 10:
+        os.nice(10 - os.getpriority(os.PRIO_PROCESS, 0))
 
 
 def plan_stop(config: Config, state: State) -> PlannedMotion:
