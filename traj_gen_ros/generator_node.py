@@ -242,14 +242,19 @@ class TrajectoryGenerator(Node):
                                   self.context)
             except Exception:  # noqa: BLE001 - the context was shut down: the node ends
                 return
-            if self._closing:
+            if self._closing or not self.context.ok():
                 return
             with self._lock:
                 last_ns = self._last_published_ns
             if last_ns > next_ns - period_ns // 2:  # another thread published just now
                 next_ns = last_ns
                 continue
-            self._publish_setpoint()
+            try:
+                self._publish_setpoint()
+            except Exception as error:  # noqa: BLE001 - the stream outlives any one failure
+                if self._closing or not self.context.ok():
+                    return  # shutting down (SIGINT/SIGTERM): the publisher is gone
+                self.get_logger().error(f'stream: publishing failed: {error!r}')
             now_ns = clock.now().nanoseconds
             if now_ns - next_ns > period_ns:  # fell behind: restart the phase from now
                 next_ns = now_ns
