@@ -580,8 +580,10 @@ def _plan_via(config: Config, state: State, hold: np.ndarray,
     state = _as_state(state)
     points, times, velocities, accelerations = via_points(config.joints, state, hold,
                                                           request)
-    if len(points) == 1:  # only the start is left: come to rest there
-        return _plan_goal(config, state, points[0], GoalRequest(np.zeros(0, int), np.zeros(0)))
+    if len(points) == 1:  # only the start is left: the named joints come to rest there,
+        target = np.array(hold, dtype=float)  # the others keep the target they had
+        target[request.joints] = request.positions[-1]
+        return _plan_goal(config, state, target, GoalRequest(np.zeros(0, int), np.zeros(0)))
     profile = config.profile
     if profile == 'lspb' and (velocities is not None or accelerations is not None):
         raise RequestError('profile lspb takes the velocities at via points from the segment '
