@@ -99,7 +99,8 @@ def single_segment(
         cruise = np.sign(displacement) * acceleration * first_blend
     first_acceleration = np.sign(cruise - start_velocity) * acceleration
     last_acceleration = -np.sign(cruise) * acceleration
-    return three_pieces(start, goal, duration, (first_blend, last_blend), cruise,
+    moves = (0.5 * (start_velocity + cruise) * first_blend, 0.5 * cruise * last_blend)
+    return three_pieces(start, goal, duration, (first_blend, last_blend), moves, cruise,
                         start_velocity, (first_acceleration, last_acceleration))
 
 
@@ -108,6 +109,7 @@ def three_pieces(
     goal: np.ndarray,
     duration: float,
     blend_times: tuple[np.ndarray, np.ndarray],
+    blend_moves: tuple[np.ndarray, np.ndarray],
     cruise: np.ndarray,
     start_velocity: np.ndarray | float,
     blend_accelerations: tuple[np.ndarray, np.ndarray],
@@ -115,22 +117,20 @@ def three_pieces(
     """
     Assemble blend, line, blend from their timing, all ``(joints,)`` arrays.
 
-    The first blend takes ``start_velocity`` to ``cruise`` in ``blend_times[0]``, the last
-    takes ``cruise`` to rest in ``blend_times[1]``, at the signed ``blend_accelerations``;
-    the line ends at ``goal - cruise t_b/2``, so the goal is met exactly.
+    The first blend takes ``start_velocity`` to ``cruise`` in ``blend_times[0]`` covering
+    ``blend_moves[0]``; the last takes ``cruise`` to rest in ``blend_times[1]`` covering
+    ``blend_moves[1]``; both at the signed ``blend_accelerations``. The line runs from
+    ``start + blend_moves[0]`` to ``goal - blend_moves[1]``, so the goal is met exactly.
     """
-    first_blend, last_blend = blend_times
     breakpoints = np.empty((4, start.size))
-    breakpoints[0], breakpoints[1] = 0.0, first_blend
-    breakpoints[2], breakpoints[3] = duration - last_blend, duration
+    breakpoints[0], breakpoints[1], breakpoints[3] = 0.0, blend_times[0], duration
+    np.subtract(duration, blend_times[1], out=breakpoints[2])
     coefficients = np.zeros((3, 3, start.size))
-    coefficients[0, 0], coefficients[0, 1] = start, start_velocity
-    coefficients[0, 2] = blend_accelerations[0]
-    coefficients[2, 2] = blend_accelerations[1]
+    coefficients[0, 0], coefficients[0, 1], coefficients[1:, 1] = start, start_velocity, cruise
+    coefficients[0, 2], coefficients[2, 2] = blend_accelerations
     coefficients[:, 2] *= 0.5
-    coefficients[1, 0] = start + 0.5 * (start_velocity + cruise) * first_blend
-    coefficients[1, 1] = coefficients[2, 1] = cruise
-    coefficients[2, 0] = goal - 0.5 * cruise * last_blend
+    np.add(start, blend_moves[0], out=coefficients[1, 0])
+    np.subtract(goal, blend_moves[1], out=coefficients[2, 0])
     return BlendedTrajectory(breakpoints, coefficients)
 
 

@@ -62,12 +62,10 @@ def min_time(
     length gives a zero-duration trajectory that holds ``q0``.
 
     """
-    rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0, a0=a0)
-    start, goal, start_velocity, start_acceleration = rows
-    joint_count = rows.shape[1]
-    max_velocity = validation.positive_per_joint('max_velocity', max_velocity, joint_count)
-    max_acceleration = validation.positive_per_joint(
-        'max_acceleration', max_acceleration, joint_count)
+    rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0, a0=a0, max_velocity=max_velocity,
+                                     max_acceleration=max_acceleration)
+    validation.require_positive(rows[4:], ('max_velocity', 'max_acceleration'))
+    start, goal, start_velocity, start_acceleration, max_velocity, max_acceleration = rows
     if profile not in PROFILES:
         raise ValueError(f'profile must be one of {", ".join(PROFILES)}, got "{profile}"')
     if np.count_nonzero(start_velocity) or np.count_nonzero(start_acceleration):
@@ -111,7 +109,9 @@ def _min_time_lspb(
     shrink = np.where(moving, joint_times, duration) / duration  # 1/k
     blend = ramp / shrink
     acceleration = np.sign(displacement) * max_acceleration * (shrink * shrink)
-    return three_pieces(start, goal, duration, (blend, blend), acceleration * blend, 0.0,
+    cruise = acceleration * blend
+    move = 0.5 * cruise * blend
+    return three_pieces(start, goal, duration, (blend, blend), (move, move), cruise, 0.0,
                         (acceleration, -acceleration))
 
 

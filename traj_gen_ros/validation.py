@@ -51,15 +51,20 @@ def finite_array(name: str, value: ArrayLike, max_ndim: int, item: str = 'joint'
 
 
 def joint_count_of(**values: np.ndarray) -> int:
-    """Return the joint count that scalars and 1-D per-joint arrays agree on."""
+    """
+    Return the joint count that scalars and 1-D per-joint arrays agree on.
+
+    The first 1-D array (the positions, or the path) sets the count; a disagreeing one is
+    named with its length and the count expected.
+    """
     sizes = {name: array.size for name, array in values.items() if array.ndim == 1}
     if not sizes:
         return 1
-    counts = set(sizes.values())
-    if len(counts) > 1:
-        listed = ', '.join(f'{name} has {size}' for name, size in sizes.items())
-        raise ValueError(f'per-joint arrays disagree in length ({listed}); give one per joint')
-    count = counts.pop()
+    reference, count = next(iter(sizes.items()))
+    for name, size in sizes.items():
+        if size != count:
+            raise ValueError(f'{name} has {size} values for {count} joints (as {reference}); '
+                             'give one value, or one per joint')
     if count == 0:
         raise ValueError('no joints: per-joint arrays are empty')
     return count
@@ -95,6 +100,14 @@ def positive_per_joint(name: str, value: ArrayLike, joint_count: int) -> np.ndar
         joint = int(np.argmin(valid))
         raise ValueError(f'{name} must be finite and > 0; joint {joint} has {array[joint]}')
     return array
+
+
+def require_positive(rows: np.ndarray, names: tuple[str, ...]) -> None:
+    """Check that every entry of the per-joint ``rows`` named ``names`` is > 0."""
+    if np.count_nonzero(rows > 0.0) != rows.size:
+        row, joint = (int(index) for index in np.argwhere(rows <= 0.0)[0])
+        raise ValueError(f'{names[row]} must be finite and > 0; joint {joint} has '
+                         f'{rows[row, joint]}')
 
 
 def path_points(points: ArrayLike) -> np.ndarray:
@@ -171,5 +184,5 @@ def _explain_rows(like: np.ndarray | None, arrays: dict[str, np.ndarray]) -> Non
             raise ValueError(f'{name} must be a scalar or one value per joint, '
                              f'got shape {array.shape}')
     if like is not None:
-        arrays = dict(arrays, points=np.asarray(like).reshape(-1))
+        arrays = {'points': np.asarray(like).reshape(-1), **arrays}
     joint_count_of(**arrays)
