@@ -580,10 +580,6 @@ def _plan_via(config: Config, state: State, hold: np.ndarray,
     state = _as_state(state)
     points, times, velocities, accelerations = via_points(config.joints, state, hold,
                                                           request)
-    if len(points) == 1:  # only the start is left: the named joints come to rest there,
-        target = np.array(hold, dtype=float)  # the others keep the target they had
-        target[request.joints] = request.positions[-1]
-        return _plan_goal(config, state, target, GoalRequest(np.zeros(0, int), np.zeros(0)))
     profile = config.profile
     if profile == 'lspb' and (velocities is not None or accelerations is not None):
         raise RequestError('profile lspb takes the velocities at via points from the segment '
@@ -592,12 +588,19 @@ def _plan_via(config: Config, state: State, hold: np.ndarray,
     if profile == 'cubic' and accelerations is not None:
         raise RequestError('profile cubic cannot honour accelerations at via points: leave '
                            'them empty or use profile quintic')
-    if velocities is not None and not np.allclose(velocities[-1], 0.0, atol=1e-12):
+    # The request's own last point (a lone point at the start is dropped from ``points``).
+    if request.velocities is not None and \
+            not np.allclose(request.velocities[-1], 0.0, atol=1e-12):
         raise RequestError('the last point must have zero velocity: the generator holds '
                            'still at the end of every plan')
-    if accelerations is not None and not np.allclose(accelerations[-1], 0.0, atol=1e-12):
+    if request.accelerations is not None and \
+            not np.allclose(request.accelerations[-1], 0.0, atol=1e-12):
         raise RequestError('the last point must have zero acceleration: the generator holds '
                            'still at the end of every plan')
+    if len(points) == 1:  # only the start is left: the named joints come to rest there,
+        target = np.array(hold, dtype=float)  # the others keep the target they had
+        target[request.joints] = request.positions[-1]
+        return _plan_goal(config, state, target, GoalRequest(np.zeros(0, int), np.zeros(0)))
     build = _via_builder(config, state, points, velocities, accelerations)
     a_limit = config.profile_acceleration
     if times is None:
