@@ -11,7 +11,6 @@ import re
 import core_helpers as helpers
 import numpy as np
 import pytest
-
 from traj_gen_ros import cubic, cubic_via, lspb, lspb_via, quintic
 
 # --- Cubic polynomials, eq. (6) and (9) -----------------------------------------------
