@@ -4,7 +4,9 @@ Flood the generator node with goals while it streams, and report what it kept up
 Default: 1,000 goals per second for 10 s at ``rate_hz`` 500, from a second process over
 DDS (isolated domain, localhost discovery; the node is a subprocess). Reported: requests
 sent and the achieved request rate; statuses by kind (accepted, superseded, refused);
-JointState period p50/p99/max from the node's stamps during the flood; the node's RSS
+JointState period mean/p50/p99/max from the node's stamps during the flood (from its first
+goal on; the longest gap while the flooding process started is reported apart), and the
+samples published but not received (DDS publication sequence numbers); the node's RSS
 (``VmRSS`` in ``/proc/<pid>/status``) before and after; the largest position/velocity
 step against what the limits allow; whether the final setpoint is the newest goal.
 
@@ -35,6 +37,7 @@ import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
+from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 
 
@@ -81,23 +84,34 @@ def goal(k: int) -> JointState:
 
 
 def flood(node: Node, publisher, request_hz: float, seconds: float, tag: str
-          ) -> tuple[int, float]:
-    """Publish goals on a fixed schedule, spinning in between; return (sent, elapsed)."""
+          ) -> tuple[int, float, int]:
+    """
+    Publish goals on a fixed schedule, spinning in between.
+
+    Returns (sent, elapsed s, system time of the first goal in ns).
+
+    The goals are serialised beforehand, so that sending them costs this process (which
+    shares the machine with the node) little.
+    """
     period = 1.0 / request_hz
+    wire = []
+    for k in range(int(seconds * request_hz) + 1):
+        message = goal(k)
+        message.header.frame_id = f'{tag}-{k}'
+        wire.append(serialize_message(message))
     began = time.monotonic()
+    began_ns = time.time_ns()
     sent = 0
     while True:
         elapsed = time.monotonic() - began
         if elapsed >= seconds:
             break
         due = int(elapsed / period) + 1
-        while sent < due:
-            message = goal(sent)
-            message.header.frame_id = f'{tag}-{sent}'
-            publisher.publish(message)
+        while sent < min(due, len(wire)):
+            publisher.publish(wire[sent])
             sent += 1
         rclpy.spin_once(node, timeout_sec=max(0.0, due * period - elapsed))
-    return sent, time.monotonic() - began
+    return sent, time.monotonic() - began, began_ns
 
 
 def flooder(tag: str, request_hz: float, seconds: float) -> dict:
@@ -123,7 +137,7 @@ def flooder(tag: str, request_hz: float, seconds: float) -> dict:
         rclpy.spin_once(node, timeout_sec=0.01)
         if time.monotonic() > deadline:
             raise RuntimeError('the generator did not match')
-    sent, elapsed = flood(node, publisher, request_hz, seconds, tag)
+    sent, elapsed, began_ns = flood(node, publisher, request_hz, seconds, tag)
     last = f'{tag}-{sent - 1}'
     deadline = time.monotonic() + 30.0
     while last not in statuses and time.monotonic() < deadline:
@@ -139,7 +153,8 @@ def flooder(tag: str, request_hz: float, seconds: float) -> dict:
     counts['unanswered'] = sum(1 for a, _ in answers if a is None)
     counts['lost_before_the_node'] = counts['unanswered'] - (ids[-1] - ids[0] + 1 - len(ids))
     last_status = statuses.get(last, (None, None))[0]
-    return {'requests_sent': sent, 'request_hz_achieved': round(sent / elapsed, 1),
+    return {'began_ns': began_ns, 'requests_sent': sent,
+            'request_hz_achieved': round(sent / elapsed, 1),
             **counts, 'status_messages': len({id(a) for a, _ in answers if a is not None}),
             'last_request': None if last_status is None else {
                 'level': int.from_bytes(last_status.level, 'little'),
@@ -148,15 +163,32 @@ def flooder(tag: str, request_hz: float, seconds: float) -> dict:
 
 
 class Recorder(Node):
-    """Record the stream only (stamp, position, velocity), so that it keeps up."""
+    """
+    Record the stream as it arrives, cheaply; decode it afterwards.
+
+    Keeps the raw bytes and the publication sequence number of each message, so that the
+    recorder keeps up on a busy machine and lost samples can be counted.
+    """
 
     def __init__(self) -> None:
         super().__init__(f'recorder_{os.getpid()}')
-        self.rows: list[tuple[int, list, list]] = []
+        self.raw: list[bytes] = []
+        self.sequence: list[int] = []
         self.create_subscription(
-            JointState, '/joint_states',
-            lambda m: self.rows.append((stamp_ns(m.header.stamp), m.position, m.velocity)),
-            QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+            JointState, '/joint_states', self._record,
+            QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE), raw=True)
+
+    def _record(self, data: bytes, info: dict) -> None:
+        self.raw.append(data)
+        self.sequence.append(info['publication_sequence_number'])
+
+    def rows(self, first: int = 0, stop: int | None = None
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Decode the recorded messages ``[first:stop]``: stamps (ns), positions, velocities."""
+        messages = [deserialize_message(data, JointState) for data in self.raw[first:stop]]
+        return (np.array([stamp_ns(m.header.stamp) for m in messages], dtype=np.int64),
+                np.array([m.position for m in messages]),
+                np.array([m.velocity for m in messages]))
 
     def spin_until(self, condition, timeout: float, what: str) -> None:
         """Spin until ``condition()``; raise after ``timeout`` s."""
@@ -169,11 +201,12 @@ class Recorder(Node):
     def wait_at_rest(self, timeout: float) -> np.ndarray:
         """Wait for ten identical zero-velocity samples; return the position."""
         def resting() -> bool:
-            tail = self.rows[-10:]
-            return len(tail) == 10 and all(not any(v) for _, _, v in tail) and \
-                len({tuple(q) for _, q, _ in tail}) == 1
+            if len(self.raw) < 10:
+                return False
+            _, q, v = self.rows(len(self.raw) - 10)
+            return not v.any() and (q == q[-1]).all()
         self.spin_until(resting, timeout, 'the stream to hold still')
-        return np.array(self.rows[-1][1])
+        return self.rows(len(self.raw) - 1)[1][-1]
 
 
 def run_flooder(recorder: Recorder, tag: str, request_hz: float, seconds: float) -> dict:
@@ -201,21 +234,21 @@ def run(rate_hz: float = 500.0, request_hz: float = 1000.0, seconds: float = 10.
     generator = NodeProcess('-p', f'rate_hz:={rate_hz}')
     try:
         recorder = Recorder()
-        recorder.spin_until(lambda: len(recorder.rows) > 10, 30.0, 'the stream')
+        recorder.spin_until(lambda: len(recorder.raw) > 10, 30.0, 'the stream')
         pid = generator.process.pid
         # Warm up (imports, first plans), then measure from rest.
         run_flooder(recorder, 'warm', 200.0, 1.0)
         recorder.wait_at_rest(timeout=30.0)
-        idle_first = len(recorder.rows)
-        recorder.spin_until(lambda: len(recorder.rows) >= idle_first + int(2 * rate_hz),
+        idle_first = len(recorder.raw)
+        recorder.spin_until(lambda: len(recorder.raw) >= idle_first + int(2 * rate_hz),
                             10.0, 'two idle seconds')
-        idle = np.diff([row[0] for row in recorder.rows[idle_first:]]) * 1e-9
+        idle = np.diff(recorder.rows(idle_first)[0]) * 1e-9
         worker = node_pid(pid, b'spawn_main')  # the planning process
         rss_before = rss_kib(pid)
         worker_before = rss_kib(worker)
-        first = len(recorder.rows)
-        start_ns = recorder.get_clock().now().nanoseconds
+        first = len(recorder.raw)
         figures = run_flooder(recorder, 'flood', request_hz, seconds)
+        start_ns = figures.pop('began_ns')  # the flood's window: from its first goal on
         end_ns = start_ns + int(seconds * 1e9)
         final = recorder.wait_at_rest(timeout=30.0)
         rss_after = rss_kib(pid)
@@ -226,11 +259,11 @@ def run(rate_hz: float = 500.0, request_hz: float = 1000.0, seconds: float = 10.
         code = generator.stop()
         output = generator.output()
         generator.close()
-    rows = recorder.rows[first:]
-    stamps = np.array([row[0] for row in rows]) * 1e-9
-    q = np.array([row[1] for row in rows])
-    v = np.array([row[2] for row in rows])
+    stamps, q, v = recorder.rows(first)
+    stamps = stamps * 1e-9
+    lost = int((np.diff(recorder.sequence[first:]) - 1).sum())  # published, not received
     window = (stamps >= start_ns * 1e-9) & (stamps <= end_ns * 1e-9)
+    joining = np.diff(stamps[stamps <= start_ns * 1e-9])  # while the flooder started
     steps = np.diff(stamps)
     during = np.diff(stamps[window])
     position_step = (np.abs(np.diff(q, axis=0)) / (MAX_VELOCITY * steps[:, None])).max()
@@ -247,8 +280,11 @@ def run(rate_hz: float = 500.0, request_hz: float = 1000.0, seconds: float = 10.
                       'max': round(float(during.max()) * 1e3, 3),
                       'idle_p50': round(float(np.percentile(idle, 50)) * 1e3, 3),
                       'idle_p99': round(float(np.percentile(idle, 99)) * 1e3, 3),
-                      'idle_max': round(float(idle.max()) * 1e3, 3)},
+                      'idle_max': round(float(idle.max()) * 1e3, 3),
+                      'flooder_joining_max': round(float(joining.max(initial=0.0)) * 1e3, 3)},
         'samples_during_flood': int(window.sum()),
+        'rate_during_flood_hz': round(float(1.0 / during.mean()), 1),
+        'samples_lost_in_transport': lost,
         'max_position_step_vs_limit': round(float(position_step), 4),
         'max_velocity_step_vs_limit': round(float(velocity_step), 4),
         'finite': bool(np.isfinite(q).all() and np.isfinite(v).all()),
@@ -282,9 +318,12 @@ def main() -> None:
           f"{figures['refused']} refused, {figures['unanswered']} unanswered "
           f"({figures['lost_before_the_node']} never reached the node), in "
           f"{figures['status_messages']} status messages")
-    print(f"  period ms: nominal {period['nominal']}, p50 {period['p50']}, "
-          f"p99 {period['p99']}, max {period['max']} (idle before: p50 {period['idle_p50']}, "
-          f"p99 {period['idle_p99']}, max {period['idle_max']})")
+    print(f"  period ms: nominal {period['nominal']}, mean {period['mean']}, p50 "
+          f"{period['p50']}, p99 {period['p99']}, max {period['max']} (idle before: p50 "
+          f"{period['idle_p50']}, p99 {period['idle_p99']}, max {period['idle_max']}; while "
+          f"the flooder started: max {period['flooder_joining_max']})")
+    print(f"  stream during the flood: {figures['rate_during_flood_hz']} Hz, "
+          f"{figures['samples_lost_in_transport']} samples published but not received")
     print(f"  RSS KiB: before {figures['rss_kib']['before']}, after "
           f"{figures['rss_kib']['after']} (growth {figures['rss_kib']['growth']}); planning "
           f"worker {figures['worker_rss_kib']['before']} -> {figures['worker_rss_kib']['after']}")

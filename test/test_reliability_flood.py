@@ -2,11 +2,12 @@
 Reliability (issue 5): 1,000 goals per second for 10 s while streaming at 500 Hz.
 
 Runs ``benchmarks/flood.py`` (the figures land in ``out/reliability_flood.json``) and
-asserts only generous bounds, since the machine is shared: every request answered, the
-newest applied, no setpoint non-finite or beyond the limits from one sample to the next,
-the stream never silent for more than 10 periods (or 3x the longest gap of the same
-stream idle just before, on a loaded machine), p99 period within 5 periods, RSS growth
-(node and planning worker) under 20 MiB, a clean exit.
+asserts bounds with room for a shared 2-core machine (node, planning worker, flooding
+client and recorder all run on it): every request answered, the newest applied, no
+setpoint non-finite or beyond the limits from one sample to the next; during the flood
+the stream keeps 80 % of its rate, its p99 period stays within 5 periods and it is never
+silent for more than 10 periods (or 3x the longest gap of the same stream idle just
+before); RSS growth (node and planning worker) under 20 MiB; a clean exit.
 """
 
 import importlib.util
@@ -25,9 +26,6 @@ def load_flood():
     return module
 
 
-@pytest.mark.xfail(strict=False, reason='known defect: on a fresh clone one flood run showed a '
-                   '334 ms stream stall (p99 5.9 ms); cause not yet found (worker spawn or GC '
-                   'suspected). Figures are still printed; see the closing note of issue 5.')
 def test_flood_of_goals_while_streaming_at_500_hz():
     figures = load_flood().run(rate_hz=500.0, request_hz=1000.0, seconds=10.0)
     out = REPO / 'out'
@@ -48,7 +46,7 @@ def test_flood_of_goals_while_streaming_at_500_hz():
     assert period['max'] <= min(100.0, max(10 * period['nominal'], 3 * period['idle_max'])), \
         figures
     assert period['p99'] <= 5 * period['nominal'], figures
-    assert figures['samples_during_flood'] >= 0.5 * 500 * 10, figures
+    assert figures['rate_during_flood_hz'] >= 0.8 * 500, figures
     assert figures['rss_kib']['growth'] < 20 * 1024, figures['rss_kib']
     assert figures['worker_rss_kib']['growth'] < 20 * 1024, figures['worker_rss_kib']
     assert figures['exit_code'] == 0 and not figures['traceback']

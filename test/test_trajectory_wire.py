@@ -1,12 +1,17 @@
-"""The numpy CDR writer produces the message rclpy itself would send, field by field."""
+"""The numpy CDR writers produce the messages rclpy itself would send, field by field."""
 
 from builtin_interfaces.msg import Duration
 from hypothesis import given, settings
 from hypothesis import strategies as st
 import numpy as np
 import pytest
-from rclpy.serialization import deserialize_message
-from traj_gen_ros.trajectory_wire import joint_trajectory_cdr
+from rclpy.serialization import deserialize_message, serialize_message
+from sensor_msgs.msg import JointState
+from traj_gen_ros.trajectory_wire import (
+    joint_names_cdr,
+    joint_state_cdr,
+    joint_trajectory_cdr,
+)
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 names = st.text(alphabet='abcdefgh_', min_size=1, max_size=9)
@@ -61,3 +66,18 @@ def test_a_thousand_points_carry_exact_values():
     np.testing.assert_array_equal(decoded.points[1000].velocities, -positions[1000])
     np.testing.assert_array_equal(decoded.points[1000].accelerations, 2 * positions[1000])
     assert len(decoded.points[0].effort) == 0
+
+
+@settings(max_examples=150, deadline=None)
+@given(joint_names=st.lists(names, max_size=9), stamp_ns=st.integers(0, 2**31 * 10**9 - 1),
+       seed=st.integers(0, 99))
+def test_joint_state_bytes_match_rclpy(joint_names, stamp_ns, seed):
+    rng = np.random.default_rng(seed)
+    position, velocity = rng.normal(size=(2, len(joint_names))) * 10.0 ** rng.integers(
+        -300, 300, size=(2, len(joint_names)))
+    wire = joint_state_cdr(stamp_ns, joint_names_cdr(joint_names), position, velocity)
+    expected = JointState(name=joint_names, position=position.tolist(),
+                          velocity=velocity.tolist())
+    expected.header.stamp.sec, expected.header.stamp.nanosec = divmod(stamp_ns, 10**9)
+    assert deserialize_message(wire, JointState) == expected
+    assert len(wire) == len(serialize_message(expected))  # same layout, padding included

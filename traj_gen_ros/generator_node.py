@@ -18,9 +18,11 @@ Interface (all names relative, so namespaces and remapping work):
 from __future__ import annotations
 
 import collections
+from collections.abc import Callable
 from dataclasses import dataclass
 import json
 import multiprocessing
+import signal
 import struct
 import sys
 import threading
@@ -36,18 +38,18 @@ from rcl_interfaces.msg import (
     SetParametersResult,
 )
 import rclpy
-from rclpy._rclpy_pybind11 import RCLError
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
-from rclpy.time import Time
+from rclpy.signals import SignalHandlerOptions
+from rclpy.subscription import Subscription
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from traj_gen_ros import planning
-from traj_gen_ros.trajectory_wire import joint_trajectory_cdr
+from traj_gen_ros.trajectory_wire import joint_names_cdr, joint_state_cdr, joint_trajectory_cdr
 from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
@@ -57,6 +59,8 @@ CONFIG_PARAMETERS = ('joints', 'rate_hz', 'profile', 'via_velocities', 'max_velo
 PER_JOINT = 'one value for all joints, or one per joint'
 #: The planner thread gets the GIL back this often (s) so the stream keeps its rate.
 SWITCH_INTERVAL = 0.0001
+#: The spin loop checks this often (s) whether SIGINT/SIGTERM asked it to end.
+SIGNAL_POLL = 0.1
 #: Look-ahead of a new plan's start: at least this many stream periods ...
 LEAD_PERIODS = 2
 #: ... and this multiple of the slowest of the recent planning times, at most MAX_LEAD s.
@@ -71,6 +75,12 @@ MIN_PLAN_GAP = 0.002
 PLAN_TIMEOUT = 5.0
 #: Depth of the request subscriptions: a burst while the stream's thread waits is kept.
 REQUEST_DEPTH = 1000
+#: Request callbacks run at most this often (s): a flood is taken in batches (each drains
+#: the backlog), so the executor thread holds the GIL less and the stream keeps its rate.
+REQUEST_ROUND_PERIOD = 0.005
+#: Requests superseded by newer ones are answered together, at most this late (s): under
+#: a flood one status per window instead of one per request (publishing holds the GIL).
+SUPERSEDED_WINDOW = 0.02
 
 
 @dataclass
@@ -133,6 +143,7 @@ class TrajectoryGenerator(Node):
         start = planning.PlannedMotion(planning.Hold(initial), 'hold', initial)
         self._schedule = planning.Schedule(start)
         self._names = list(self._config.joints)
+        self._names_cdr = joint_names_cdr(self._names)
         # The executor thread streams and parses; the planner thread plans (see _run_planner).
         # _lock guards the schedule, the last published time and the schedule version.
         self._lock = threading.Lock()
@@ -144,7 +155,11 @@ class TrajectoryGenerator(Node):
         self._wake = threading.Condition()
         self._inbox: _Request | None = None
         self._outbox: list[tuple[str, int, int, planning.PlannedMotion, dict]] = []
+        self._superseded: list[_Request] = []  # executor thread only
+        self._last_round = 0.0  # time.monotonic() of the last request callback's end
         self._closing = False
+        self._stopping = threading.Event()  # set when the node closes: the stream ends
+        self.context.on_shutdown(self._stopping.set)
         reliable = ReliabilityPolicy.RELIABLE
         self._joint_states = self.create_publisher(
             JointState, 'joint_states', QoSProfile(depth=10, reliability=reliable))
@@ -157,9 +172,11 @@ class TrajectoryGenerator(Node):
             JointState, '~/goal', self._on_goal, REQUEST_DEPTH)
         # Raw: the point count is read off the wire first, so a huge message is refused
         # without building one Python object per point on the stream's thread.
-        self.create_subscription(JointTrajectory, '~/via_points', self._on_via_points_raw,
-                                 REQUEST_DEPTH, raw=True)
+        self._via_subscription = self.create_subscription(
+            JointTrajectory, '~/via_points', self._on_via_points_raw, REQUEST_DEPTH, raw=True)
         self.create_service(Trigger, '~/stop', self._on_stop)
+        self._superseded_timer = self.create_timer(SUPERSEDED_WINDOW, self._answer_superseded)
+        self._superseded_timer.cancel()  # runs only while superseded requests wait
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._trajectory_message(0, start)  # warm up the message imports
@@ -225,6 +242,21 @@ class TrajectoryGenerator(Node):
     def _now_ns(self) -> int:
         return self.get_clock().now().nanoseconds
 
+    def _wait_until(self, deadline_ns: int, period_ns: int) -> bool:
+        """
+        Sleep until ``deadline_ns`` on the node clock; False once the node is closing.
+
+        Waits on an event (one wake-up, no objects made per period, unlike
+        ``Clock.sleep_until``) in steps of at most a period, so a simulated clock that
+        runs faster or slower than the wall clock is followed too.
+        """
+        while True:
+            remaining_ns = deadline_ns - self._now_ns()
+            if remaining_ns <= 0:
+                return not self._stopping.is_set()
+            if self._stopping.wait(min(remaining_ns, period_ns) * 1e-9):
+                return False
+
     def _run_stream(self) -> None:
         """
         Publish the setpoint every ``1/rate_hz`` s on the node clock, in its own thread.
@@ -233,17 +265,11 @@ class TrajectoryGenerator(Node):
         it beyond a GIL switch. A setpoint published by another thread (a plan's first)
         re-phases it: the next one comes a period after that. Late ticks are not caught up.
         """
-        clock = self.get_clock()
-        next_ns = clock.now().nanoseconds
-        while not self._closing and self.context.ok():
+        next_ns = self._now_ns()
+        while True:
             period_ns = int(1e9 / self._config.rate_hz)
             next_ns += period_ns
-            try:
-                clock.sleep_until(Time(nanoseconds=next_ns, clock_type=clock.clock_type),
-                                  self.context)
-            except Exception:  # noqa: BLE001 - the context was shut down: the node ends
-                return
-            if self._closing or not self.context.ok():
+            if not self._wait_until(next_ns, period_ns) or not self.context.ok():
                 return
             with self._lock:
                 last_ns = self._last_published_ns
@@ -253,22 +279,20 @@ class TrajectoryGenerator(Node):
             try:
                 self._publish_setpoint()
             except Exception as error:  # noqa: BLE001 - the stream outlives any one failure
-                if self._closing or not self.context.ok():
+                if self._stopping.is_set() or not self.context.ok():
                     return  # shutting down (SIGINT/SIGTERM): the publisher is gone
                 self.get_logger().error(f'stream: publishing failed: {error!r}')
-            now_ns = clock.now().nanoseconds
+            now_ns = self._now_ns()
             if now_ns - next_ns > period_ns:  # fell behind: restart the phase from now
                 next_ns = now_ns
 
     def _publish_setpoint(self) -> None:
         with self._lock:  # the planner thread publishes too: keep the stamps in order
-            now = self.get_clock().now()
-            state = self._schedule.state_at(now.nanoseconds)
-            self._last_published_ns = now.nanoseconds
-            message = JointState(name=self._names, position=state.position.tolist(),
-                                 velocity=state.velocity.tolist())
-            message.header.stamp = now.to_msg()
-            self._joint_states.publish(message)
+            now_ns = self._now_ns()
+            state = self._schedule.state_at(now_ns)
+            self._last_published_ns = now_ns
+            self._joint_states.publish(joint_state_cdr(
+                now_ns, self._names_cdr, state.position, state.velocity))
 
     def _trajectory_message(self, start_ns: int, motion: planning.PlannedMotion) -> bytes:
         """
@@ -296,18 +320,45 @@ class TrajectoryGenerator(Node):
         return {'request': kind, 'request_id': str(self._received), 'frame_id': frame_id}
 
     def _on_goal(self, message: JointState) -> None:
-        parsed = [self._goal(message)]
-        # Drain the backlog in this one callback: only the newest can be planned, and one
-        # executor round per message would cost more than the parsing (a flood of goals).
-        with self._goal_subscription.handle:
-            for _ in range(REQUEST_DEPTH):
-                taken = self._goal_subscription.handle.take_message(JointState, False)
-                if taken is None:
-                    break
-                parsed.append(self._goal(taken[0]))
-        parsed = [request for request in parsed if request is not None]
-        if parsed:
-            self._submit(parsed[-1], parsed[:-1])
+        self._take_requests(self._goal_subscription, JointState, False, self._goal, message)
+
+    def _on_via_points_raw(self, data: bytes) -> None:
+        self._take_requests(self._via_subscription, JointTrajectory, True, self._via_points,
+                            data)
+
+    def _take_requests(self, subscription: Subscription, message_type: type, raw: bool,
+                       parse: Callable[[object], _Request | None], first: object) -> None:
+        """
+        Parse ``first`` and every request waiting behind it; submit the newest valid one.
+
+        Draining the backlog in one callback: only the newest can be planned, and one
+        executor round per message would cost more than the parsing (a flood).
+        """
+        try:
+            parsed = [parse(first)]
+            with subscription.handle:
+                for _ in range(REQUEST_DEPTH):
+                    taken = subscription.handle.take_message(message_type, raw)
+                    if taken is None:
+                        break
+                    parsed.append(parse(taken[0]))
+            parsed = [request for request in parsed if request is not None]
+            if parsed:
+                self._submit(parsed[-1], parsed[:-1])
+        finally:
+            self._pace_requests()
+
+    def _pace_requests(self) -> None:
+        """
+        End a request callback no sooner than ``REQUEST_ROUND_PERIOD`` after the last one.
+
+        Under a flood the next callback then finds a batch to drain at once; a request
+        after a quiet spell is not delayed. Other callbacks (``~/stop``) wait at most that.
+        """
+        rest = self._last_round + REQUEST_ROUND_PERIOD - time.monotonic()
+        if rest > 0.0:
+            time.sleep(rest)
+        self._last_round = time.monotonic()
 
     def _goal(self, message: JointState) -> _Request | None:
         values = self._request_values('goal', message.header.frame_id)
@@ -318,7 +369,7 @@ class TrajectoryGenerator(Node):
             return None
         return _Request('goal', values, 0, request)
 
-    def _on_via_points_raw(self, data: bytes) -> None:
+    def _via_points(self, data: bytes) -> _Request | None:
         try:
             frame_id, count = _peek_via_points(data)
         except (IndexError, ValueError, struct.error):
@@ -328,10 +379,10 @@ class TrajectoryGenerator(Node):
                          f'points, above the limit of {planning.MAX_VIA_POINTS}: split the '
                          'path into several requests',
                          self._request_values('via_points', frame_id))
-            return
-        self._on_via_points(deserialize_message(data, JointTrajectory))
+            return None
+        return self._via_points_message(deserialize_message(data, JointTrajectory))
 
-    def _on_via_points(self, message: JointTrajectory) -> None:
+    def _via_points_message(self, message: JointTrajectory) -> _Request | None:
         values = self._request_values('via_points', message.header.frame_id)
         points = message.points
         if len(points) <= planning.MAX_VIA_POINTS:  # parse_via refuses longer ones unread
@@ -341,18 +392,25 @@ class TrajectoryGenerator(Node):
             request = planning.parse_via(self._names, message.joint_names, points)
         except planning.RequestError as error:
             self._report(DiagnosticStatus.ERROR, f'via_points refused: {error}', values)
-            return
+            return None
         stamp = message.header.stamp
         stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # may be negative: "now"
-        self._submit(_Request('via_points', values, stamp_ns, request))
+        return _Request('via_points', values, stamp_ns, request)
 
     def _submit(self, request: _Request, superseded: list[_Request] | None = None) -> None:
         with self._wake:
             older, self._inbox = self._inbox, request
             self._wake.notify()
         superseded = ([] if older is None else [older]) + (superseded or [])
-        if superseded:
-            self._supersede(superseded, 'a newer request')
+        if superseded and not self._superseded:
+            self._superseded_timer.reset()
+        self._superseded += superseded
+
+    def _answer_superseded(self) -> None:
+        self._superseded_timer.cancel()
+        requests, self._superseded = self._superseded, []
+        if requests:
+            self._supersede(requests, 'a newer request')
 
     def _supersede(self, requests: list[_Request], by: str) -> None:
         """Answer requests dropped unplanned: one status, listing them if several."""
@@ -520,6 +578,7 @@ class TrajectoryGenerator(Node):
 
     def destroy_node(self) -> None:
         """Stop the planner thread, then destroy the node."""
+        self._stopping.set()
         with self._wake:
             self._closing = True
             self._wake.notify()
@@ -530,8 +589,17 @@ class TrajectoryGenerator(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    """Run the generator until SIGINT/SIGTERM; return the exit status."""
-    rclpy.init(args=args)
+    """
+    Run the generator until SIGINT/SIGTERM; return the exit status.
+
+    The signal handlers only set a flag that the spin loop checks every ``SIGNAL_POLL``
+    s: a signal that arrives while the node or the executor is being built interrupts
+    nothing half-made, and the node is then destroyed in order (exit status 0).
+    """
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
     sys.setswitchinterval(SWITCH_INTERVAL)
     node = None
     status = 0
@@ -539,13 +607,10 @@ def main(args: list[str] | None = None) -> int:
         node = TrajectoryGenerator()
         executor = SingleThreadedExecutor()
         executor.add_node(node)
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except RCLError:
-        if rclpy.ok():
-            raise
-        # SIGINT/SIGTERM during start-up: rclpy's handler already shut the context down.
+        while not stop.is_set():
+            executor.spin_once(timeout_sec=SIGNAL_POLL)
+    except ExternalShutdownException:
+        pass  # the context was shut down by someone else
     except (ValueError, ParameterException) as error:
         print(f'{NODE_NAME}: invalid parameters: {error}', file=sys.stderr)
         status = 1
