@@ -144,7 +144,7 @@ class TrajectoryGenerator(Node):
         self._schedule = planning.Schedule(start)
         self._names = list(self._config.joints)
         self._names_cdr = joint_names_cdr(self._names)
-        # The executor thread streams and parses; the planner thread plans (see _run_planner).
+        # The stream thread streams, the executor thread parses, the planner thread plans.
         # _lock guards the schedule, the last published time and the schedule version.
         self._lock = threading.Lock()
         self._last_published_ns = -(2 ** 62)
@@ -157,8 +157,8 @@ class TrajectoryGenerator(Node):
         self._outbox: list[tuple[str, int, int, planning.PlannedMotion, dict]] = []
         self._superseded: list[_Request] = []  # executor thread only
         self._last_round = 0.0  # time.monotonic() of the last request callback's end
-        self._closing = False
-        self._stopping = threading.Event()  # set when the node closes: the stream ends
+        # Set when the node closes or the context shuts down: stream and planner end.
+        self._stopping = threading.Event()
         self.context.on_shutdown(self._stopping.set)
         reliable = ReliabilityPolicy.RELIABLE
         self._joint_states = self.create_publisher(
@@ -171,7 +171,7 @@ class TrajectoryGenerator(Node):
         self._goal_subscription = self.create_subscription(
             JointState, '~/goal', self._on_goal, REQUEST_DEPTH)
         # Raw: the point count is read off the wire first, so a huge message is refused
-        # without building one Python object per point on the stream's thread.
+        # without building one Python object per point on the executor thread.
         self._via_subscription = self.create_subscription(
             JointTrajectory, '~/via_points', self._on_via_points_raw, REQUEST_DEPTH, raw=True)
         self.create_service(Trigger, '~/stop', self._on_stop)
@@ -453,9 +453,9 @@ class TrajectoryGenerator(Node):
         """Plan the newest request and publish plans, off the stream's thread."""
         while True:
             with self._wake:
-                while not self._closing and self._inbox is None and not self._outbox:
+                while not self._stopping.is_set() and self._inbox is None and not self._outbox:
                     self._wake.wait()
-                if self._closing:
+                if self._stopping.is_set():
                     return
                 outbox, self._outbox = self._outbox, []
                 request, self._inbox = self._inbox, None
@@ -467,9 +467,9 @@ class TrajectoryGenerator(Node):
                     self._plan_request(request)
                     rest = max(MIN_PLAN_GAP, time.monotonic() - began)
                     with self._wake:
-                        self._wake.wait_for(lambda: self._closing or self._outbox, rest)
+                        self._wake.wait_for(lambda: self._stopping.is_set() or self._outbox, rest)
             except Exception as error:  # noqa: BLE001 - the planner must outlive any request
-                if self._closing or not self.context.ok():
+                if self._stopping.is_set() or not self.context.ok():
                     return
                 self.get_logger().error(f'planner: unexpected failure: {error!r}')
 
@@ -493,7 +493,7 @@ class TrajectoryGenerator(Node):
             return pending.get(PLAN_TIMEOUT)
         except multiprocessing.TimeoutError:
             self._worker.terminate()
-            if not self._closing:
+            if not self._stopping.is_set():
                 self._start_worker()
             raise planning.RequestError(
                 f'planning took longer than {PLAN_TIMEOUT:g} s (the limit): send fewer via '
@@ -578,9 +578,8 @@ class TrajectoryGenerator(Node):
 
     def destroy_node(self) -> None:
         """Stop the planner thread, then destroy the node."""
-        self._stopping.set()
         with self._wake:
-            self._closing = True
+            self._stopping.set()
             self._wake.notify()
         self._worker.terminate()
         self._planner.join(timeout=10.0)
