@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 from traj_gen_ros import validation
+from traj_gen_ros.limits import JointError
 from traj_gen_ros.trajectory import Trajectory
 from traj_gen_ros.validation import ArrayLike
 
@@ -171,9 +172,9 @@ def lspb_via(
     if problem is not None:
         joint, reason = problem
         minimum = _smallest_fitting_acceleration(path, durations, acceleration, start_velocity)
-        raise ValueError(f'lspb_via: joint {joint}: {reason} with acceleration '
+        raise JointError(f'lspb_via: {{joint}}: {reason} with acceleration '
                          f'{acceleration[joint]:g}; the smallest acceleration that fits is '
-                         f'{_round_up(minimum[joint])}')
+                         f'{_round_up(minimum[joint])}', joint)
     blend_times, velocities, _, _ = timing
     return _assemble(path, durations, blend_times, velocities, start_velocity, acceleration)
 
@@ -192,10 +193,10 @@ def _rest_start_blend_time(
     if np.count_nonzero(too_low):
         joint = int(np.argmax(too_low))
         minimum = 4.0 * abs(displacement[joint]) / duration**2
-        raise ValueError(
-            f'lspb: joint {joint}: acceleration {acceleration[joint]:g} is too low to move '
+        raise JointError(
+            f'lspb: {{joint}}: acceleration {acceleration[joint]:g} is too low to move '
             f'{displacement[joint]:g} in {duration:g} s; eq. (6) needs at least '
-            f'{_round_up(minimum)}')
+            f'{_round_up(minimum)}', joint)
     return 2.0 * np.abs(displacement) / (
         acceleration * (duration + np.sqrt(np.maximum(room, 0.0))))
 

@@ -7,6 +7,14 @@ SI: rad (or m), s.
 """
 
 from traj_gen_ros.blends import BlendedTrajectory, brake, lspb, lspb_via
+from traj_gen_ros.limits import (
+    JointError,
+    LIMIT_TOLERANCE,
+    limit_violation,
+    Violation,
+    within_limits,
+)
+from traj_gen_ros.paths import plan_path
 from traj_gen_ros.polynomial import (
     continuous_velocities,
     cubic,
@@ -15,12 +23,14 @@ from traj_gen_ros.polynomial import (
     quintic,
     quintic_via,
 )
-from traj_gen_ros.timing import hold, min_time, PROFILES, via_durations, within_limits
+from traj_gen_ros.timing import hold, min_time, PROFILES, via_durations
 from traj_gen_ros.trajectory import Trajectory
 
 __all__ = [
     'PROFILES',
+    'LIMIT_TOLERANCE',
     'BlendedTrajectory',
+    'JointError',
     'Trajectory',
     'brake',
     'continuous_velocities',
@@ -28,11 +38,14 @@ __all__ = [
     'cubic_via',
     'heuristic_velocities',
     'hold',
+    'limit_violation',
     'lspb',
     'lspb_via',
     'min_time',
+    'plan_path',
     'quintic',
     'quintic_via',
+    'Violation',
     'via_durations',
     'within_limits',
 ]

@@ -21,6 +21,7 @@ from collections.abc import Callable
 import numpy as np
 from traj_gen_ros import validation
 from traj_gen_ros.blends import lspb, lspb_via, three_pieces
+from traj_gen_ros.limits import within_limits
 from traj_gen_ros.polynomial import cubic, cubic_via, quintic, quintic_via
 from traj_gen_ros.trajectory import Trajectory
 from traj_gen_ros.validation import ArrayLike
@@ -28,10 +29,15 @@ from traj_gen_ros.validation import ArrayLike
 PROFILES = ('lspb', 'cubic', 'quintic')
 # (peak velocity, peak acceleration) of a rest-to-rest unit move in unit time.
 _POLYNOMIAL_PEAKS = {'cubic': (1.5, 6.0), 'quintic': (15.0 / 8.0, 10.0 / np.sqrt(3.0))}
-_LIMIT_TOLERANCE = 1e-9
 # Polynomial plans last at least this long (s): shorter ones' coefficients ~ Δ/T⁵ overflow.
 _SHORTEST_POLYNOMIAL = 1e-9
 _BISECTION_STEPS = 60
+
+
+def check_profile(profile: str) -> None:
+    """Raise ``ValueError`` unless ``profile`` is one of :data:`PROFILES`."""
+    if profile not in PROFILES:
+        raise ValueError(f'profile must be one of {", ".join(PROFILES)}, got "{profile}"')
 
 
 def min_time(
@@ -66,8 +72,7 @@ def min_time(
                                      max_acceleration=max_acceleration)
     validation.require_positive(rows[4:], ('max_velocity', 'max_acceleration'))
     start, goal, start_velocity, start_acceleration, max_velocity, max_acceleration = rows
-    if profile not in PROFILES:
-        raise ValueError(f'profile must be one of {", ".join(PROFILES)}, got "{profile}"')
+    check_profile(profile)
     if np.count_nonzero(start_velocity) or np.count_nonzero(start_acceleration):
         return _moving_min_time(
             start, goal, max_velocity, max_acceleration, profile, start_velocity,
@@ -135,15 +140,6 @@ def hold(positions: ArrayLike) -> Trajectory:
     return Trajectory(np.zeros(2), coefficients)
 
 
-def within_limits(
-    trajectory: Trajectory, max_velocity: np.ndarray, max_acceleration: np.ndarray
-) -> bool:
-    """Tell whether no joint's exact peak exceeds its limits (relative tolerance 1e-9)."""
-    peak_velocity, peak_acceleration = trajectory.peaks()
-    return bool(np.all(peak_velocity <= max_velocity * (1.0 + _LIMIT_TOLERANCE))
-                and np.all(peak_acceleration <= max_acceleration * (1.0 + _LIMIT_TOLERANCE)))
-
-
 def shortest_duration(
     plan: Callable[[float], Trajectory],
     lower: float,
@@ -204,8 +200,7 @@ def via_durations(
     max_velocity = validation.positive_per_joint('max_velocity', max_velocity, joint_count)
     max_acceleration = validation.positive_per_joint(
         'max_acceleration', max_acceleration, joint_count)
-    if profile not in PROFILES:
-        raise ValueError(f'profile must be one of {", ".join(PROFILES)}, got "{profile}"')
+    check_profile(profile)
     if velocities not in ('heuristic', 'continuous'):
         raise ValueError(f'velocities must be "heuristic" or "continuous", got "{velocities}"')
     blend_acceleration = max_acceleration if acceleration is None else (

@@ -97,6 +97,16 @@ class Trajectory:
         durations = np.broadcast_to(np.diff(breakpoints)[:, None], velocity[:, 0].shape)
         return _peak_abs(velocity, durations), _peak_abs(acceleration, durations)
 
+    def peak_jerk(self) -> np.ndarray:
+        """Largest ``|jerk|`` (rad/s³) per joint, ``(joints,)``: exact, from the coefficients."""
+        jerk = _derivative(_derivative(_derivative(self.coefficients)))
+        if jerk.shape[1] == 0:
+            return np.zeros(self.joint_count)
+        breakpoints = self.breakpoints if self.breakpoints.ndim == 2 else \
+            self.breakpoints[:, None]
+        durations = np.broadcast_to(np.diff(breakpoints, axis=0), jerk[:, 0].shape)
+        return _peak_abs(jerk, durations)
+
     @cached_property
     def _shared_pieces(self) -> tuple[np.ndarray, np.ndarray]:
         """
