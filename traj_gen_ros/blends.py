@@ -75,7 +75,13 @@ def lspb(
     rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0)
     duration = validation.duration_of(duration)
     acceleration = validation.positive_per_joint('acceleration', acceleration, rows.shape[1])
-    return single_segment(rows[0], rows[1], duration, acceleration, rows[2])
+    with np.errstate(over='ignore', under='ignore', divide='ignore', invalid='ignore'):
+        plan = single_segment(rows[0], rows[1], np.float64(duration), acceleration, rows[2])
+    if not (np.isfinite(plan.breakpoints).all() and np.isfinite(plan.coefficients).all()):
+        raise ValueError(f'lspb: the plan overflows with duration {duration:g} s and '
+                         f'acceleration {acceleration.tolist()}: no finite plan; use values '
+                         'within about 1e-100..1e100 of each other')
+    return plan
 
 
 def single_segment(
@@ -194,8 +200,9 @@ def _rest_start_blend_time(
     ``t_b = t/2 - sqrt(θ̈² t² - 4 θ̈ |Δθ|)/(2 θ̈)``, evaluated as the equal
     ``2 |Δθ| / (θ̈ (t + sqrt(t² - 4 |Δθ|/θ̈)))``, which does not cancel for tiny moves.
     """
-    room = duration**2 - 4.0 * np.abs(displacement) / acceleration
-    too_low = room < -_FEASIBILITY_TOLERANCE * duration**2
+    # room = 1 - 4|Δθ|/(θ̈ t²), formed without t² so that long durations do not overflow.
+    room = 1.0 - 4.0 * np.abs(displacement) / acceleration / duration / duration
+    too_low = room < -_FEASIBILITY_TOLERANCE
     if np.count_nonzero(too_low):
         joint = int(np.argmax(too_low))
         minimum = 4.0 * abs(displacement[joint]) / duration**2
@@ -203,8 +210,8 @@ def _rest_start_blend_time(
             f'lspb: {{joint}}: acceleration {acceleration[joint]:g} is too low to move '
             f'{displacement[joint]:g} in {duration:g} s; eq. (6) needs at least '
             f'{_round_up(minimum)}', joint)
-    return 2.0 * np.abs(displacement) / (
-        acceleration * (duration + np.sqrt(np.maximum(room, 0.0))))
+    return 2.0 * np.abs(displacement) / acceleration / (
+        duration * (1.0 + np.sqrt(np.maximum(room, 0.0))))
 
 
 def _via_timing(

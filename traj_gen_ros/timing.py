@@ -74,8 +74,20 @@ def min_time(
     rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0, a0=a0, max_velocity=max_velocity,
                                      max_acceleration=max_acceleration)
     validation.require_positive(rows[4:], ('max_velocity', 'max_acceleration'))
-    start, goal, start_velocity, start_acceleration, max_velocity, max_acceleration = rows
     check_profile(profile)
+    # Overflow and underflow are looked for in the result, which names the joint.
+    with np.errstate(over='ignore', under='ignore', divide='ignore', invalid='ignore'):
+        try:
+            plan = _plan(profile, *rows)
+        except (OverflowError, ZeroDivisionError):
+            plan = None
+    return require_finite(plan, rows)
+
+
+def _plan(profile: str, start: np.ndarray, goal: np.ndarray, start_velocity: np.ndarray,
+          start_acceleration: np.ndarray, max_velocity: np.ndarray,
+          max_acceleration: np.ndarray) -> Trajectory:
+    """Dispatch :func:`min_time` on validated ``(joints,)`` rows."""
     if np.count_nonzero(start_velocity) or np.count_nonzero(start_acceleration):
         return _moving_min_time(
             start, goal, max_velocity, max_acceleration, profile, start_velocity,
@@ -90,6 +102,30 @@ def min_time(
         return hold(start)
     polynomial = cubic if profile == 'cubic' else quintic
     return polynomial(start, goal, max(duration, SHORTEST_POLYNOMIAL))
+
+
+def require_finite(plan: Trajectory | None, rows: np.ndarray) -> Trajectory:
+    """
+    Return ``plan`` if its duration and coefficients are finite, else raise ``ValueError``.
+
+    ``rows`` are the validated inputs ``(q0, qf, v0, a0, v_max, a_max)``; the message names
+    the joint whose numbers overflowed (or the one with the longest move) and its inputs.
+    """
+    if plan is not None and np.isfinite(plan.duration) and \
+            validation.every(np.isfinite(plan.coefficients)):
+        return plan
+    start, goal, start_velocity, start_acceleration, max_velocity, max_acceleration = rows
+    if plan is not None and not validation.every(np.isfinite(plan.coefficients)):
+        joint = int(np.argmin(np.isfinite(plan.coefficients).all(axis=(0, 1))))
+    else:
+        joint = int(np.argmax(np.abs(goal - start) / max_velocity
+                              + (max_velocity + np.abs(start_velocity)) / max_acceleration))
+    raise JointError(
+        f'{{joint}}: moving {goal[joint] - start[joint]:g} rad from velocity '
+        f'{start_velocity[joint]:g} rad/s and acceleration {start_acceleration[joint]:g} '
+        f'rad/s^2 with max_velocity {max_velocity[joint]:g} rad/s and max_acceleration '
+        f'{max_acceleration[joint]:g} rad/s^2 overflows: no finite plan; use limits and '
+        'distances within about 1e-100..1e100 of each other', joint)
 
 
 def _min_time_lspb(

@@ -128,9 +128,18 @@ class Trajectory:
             piece = np.empty((times.size, self.joint_count), dtype=np.intp)
             for joint in joints:
                 piece[:, joint] = np.searchsorted(interior[:, joint], times, side='right')
-        local_time = times[:, None] - self.breakpoints[piece, joints]
-        coefficients = self.coefficients[piece, :, joints].transpose(0, 2, 1)
-        return _horner(coefficients, local_time, self.degree)
+        flat = piece * self.joint_count + joints  # index into (pieces * joints)
+        local_time = times[:, None] - self.breakpoints[:-1].reshape(-1)[flat]
+        gathered = [self.coefficients[:, power].reshape(-1)[flat]
+                    for power in range(self.degree + 1)]
+        states = []
+        for order in range(3):
+            value = np.zeros_like(local_time)
+            for power in range(self.degree, order - 1, -1):
+                value *= local_time
+                value += _falling_factorial(power, order) * gathered[power]
+            states.append(value)
+        return states[0], states[1], states[2]
 
     @cached_property
     def _state_tables(self) -> np.ndarray:
