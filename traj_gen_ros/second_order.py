@@ -64,7 +64,9 @@ def minimum_times(
     capped = np.where(cruising, max_velocity, peak)
     cruise = np.where(cruising, (reach - (2.0 * capped**2 - start_velocity**2)
                                  / (2.0 * acceleration)) / max_velocity, 0.0)
-    return (2.0 * capped - towards) / acceleration + np.maximum(cruise, 0.0)
+    # Never shorter than braking alone (|v0|/a): it holds even where v0² underflows.
+    return np.maximum((2.0 * capped - towards) / acceleration + np.maximum(cruise, 0.0),
+                      np.abs(start_velocity) / acceleration)
 
 
 def displacement_at(

@@ -86,8 +86,10 @@ def min_time(
 
 def _plan(profile: str, start: np.ndarray, goal: np.ndarray, start_velocity: np.ndarray,
           start_acceleration: np.ndarray, max_velocity: np.ndarray,
-          max_acceleration: np.ndarray) -> Trajectory:
-    """Dispatch :func:`min_time` on validated ``(joints,)`` rows."""
+          max_acceleration: np.ndarray) -> Trajectory | None:
+    """Dispatch :func:`min_time` on validated ``(joints,)`` rows; ``None`` if it overflows."""
+    if profile != 'quintic':  # only the quintic starts from an acceleration
+        start_acceleration = np.zeros_like(start_acceleration)
     if np.count_nonzero(start_velocity) or np.count_nonzero(start_acceleration):
         return _moving_min_time(
             start, goal, max_velocity, max_acceleration, profile, start_velocity,
@@ -100,6 +102,8 @@ def _plan(profile: str, start: np.ndarray, goal: np.ndarray, start_velocity: np.
     duration = float(joint_times.max())
     if duration == 0.0:
         return hold(start)
+    if not np.isfinite(duration):
+        return None
     polynomial = cubic if profile == 'cubic' else quintic
     return polynomial(start, goal, max(duration, SHORTEST_POLYNOMIAL))
 
@@ -117,9 +121,10 @@ def require_finite(plan: Trajectory | None, rows: np.ndarray) -> Trajectory:
     start, goal, start_velocity, start_acceleration, max_velocity, max_acceleration = rows
     if plan is not None and not validation.every(np.isfinite(plan.coefficients)):
         joint = int(np.argmin(np.isfinite(plan.coefficients).all(axis=(0, 1))))
-    else:
-        joint = int(np.argmax(np.abs(goal - start) / max_velocity
-                              + (max_velocity + np.abs(start_velocity)) / max_acceleration))
+    else:  # the joint with the longest rough duration; it may be infinite itself
+        with np.errstate(over='ignore'):
+            joint = int(np.argmax(np.abs(goal - start) / max_velocity
+                                  + (max_velocity + np.abs(start_velocity)) / max_acceleration))
     raise JointError(
         f'{{joint}}: moving {goal[joint] - start[joint]:g} rad from velocity '
         f'{start_velocity[joint]:g} rad/s and acceleration {start_acceleration[joint]:g} '
@@ -285,8 +290,12 @@ def _moving_min_time(
         max_acceleration = np.maximum(max_acceleration, np.abs(start_acceleration))
     else:
         start_acceleration = np.zeros_like(start_velocity)
-    joint_sets = feasible_durations(profile, goal - start, start_velocity,
-                                    start_acceleration, max_velocity, max_acceleration)
+    # Start terms far below their limits (1e-12) only blur the candidate polynomials' degree.
+    joint_sets = feasible_durations(
+        profile, goal - start,
+        np.where(np.abs(start_velocity) < 1e-12 * max_velocity, 0.0, start_velocity),
+        np.where(np.abs(start_acceleration) < 1e-12 * max_acceleration, 0.0,
+                 start_acceleration), max_velocity, max_acceleration)
     duration = synchronised_duration(joint_sets)
     if duration is None:
         alone = [joint.first_from(SHORTEST_POLYNOMIAL) for joint in joint_sets]
