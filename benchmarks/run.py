@@ -100,9 +100,10 @@ def moving_state() -> None:
         ruckig_us = seconds_per_call(lambda p=planner, r=request, t=trajectory:
                                      p.calculate(r, t)) * 1e6
         for profile, target in target_us.items():
-            def plan(profile=profile):
-                return tg.min_time(start, goal, max_velocity, max_acceleration, profile,
-                                   v0=velocity, a0=acceleration)
+            state = (start, goal, max_velocity, max_acceleration, profile)
+
+            def plan(state=state, velocity=velocity, acceleration=acceleration):
+                return tg.min_time(*state, v0=velocity, a0=acceleration)
             if profile == 'lspb':
                 assert abs(plan().duration - trajectory.duration) <= 1e-9 * trajectory.duration
             us = seconds_per_call(plan, budget=0.5) * 1e6
