@@ -23,11 +23,7 @@ from traj_gen_ros import second_order, validation
 from traj_gen_ros.blends import lspb_via, three_pieces
 from traj_gen_ros.limits import JointError, within_limits
 from traj_gen_ros.polynomial import cubic, cubic_via, quintic, quintic_via
-from traj_gen_ros.polynomial_timing import (
-    feasible_durations,
-    SHORTEST_POLYNOMIAL,
-    synchronised_duration,
-)
+from traj_gen_ros.polynomial_timing import minimum_duration, SHORTEST_POLYNOMIAL
 from traj_gen_ros.trajectory import Trajectory
 from traj_gen_ros.validation import ArrayLike
 
@@ -291,20 +287,17 @@ def _moving_min_time(
     else:
         start_acceleration = np.zeros_like(start_velocity)
     # Start terms far below their limits (1e-12) only blur the candidate polynomials' degree.
-    joint_sets = feasible_durations(
+    duration, hopeless = minimum_duration(
         profile, goal - start,
         np.where(np.abs(start_velocity) < 1e-12 * max_velocity, 0.0, start_velocity),
         np.where(np.abs(start_acceleration) < 1e-12 * max_acceleration, 0.0,
                  start_acceleration), max_velocity, max_acceleration)
-    duration = synchronised_duration(joint_sets)
+    if hopeless is not None:
+        raise JointError(
+            f'{{joint}}: no {profile} from velocity {start_velocity[hopeless]:g} and '
+            f'acceleration {start_acceleration[hopeless]:g} stays within the limits, however '
+            'long; stop first or choose another profile', hopeless)
     if duration is None:
-        alone = [joint.first_from(SHORTEST_POLYNOMIAL) for joint in joint_sets]
-        if None in alone:
-            joint = alone.index(None)
-            raise JointError(
-                f'{{joint}}: no {profile} from velocity {start_velocity[joint]:g} and '
-                f'acceleration {start_acceleration[joint]:g} stays within the limits, however '
-                'long; stop first or choose another profile', joint)
         raise ValueError(f'no {profile} duration suits every joint at once (their feasible '
                          'durations do not overlap); stop first or choose another profile')
     planner = cubic if profile == 'cubic' else quintic
