@@ -24,7 +24,7 @@ run: $(STAMP)
 	$(VENV)/bin/generator --ros-args --params-file config/generator.yaml
 
 lint: $(STAMP)
-	$(PY) -m ruff check traj_gen_ros test benchmarks
+	$(PY) -m ruff check traj_gen_ros test benchmarks launch
 
 test: $(STAMP) lint
 	$(PY) -m pytest -q test

@@ -14,6 +14,7 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', glob('config/*.yaml')),
+        ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
     ],
     # What requirements.txt pins, unpinned: the ROS packages come from the ROS install.
     install_requires=['setuptools', 'numpy', 'matplotlib', 'urdfdom-py'],
