@@ -42,7 +42,7 @@ def env() -> dict:
 
 
 def traj_gen(*args: str) -> subprocess.CompletedProcess:
-    """Run `traj-gen ARGS` the way the README does: python -m traj_gen_ros.cli."""
+    """Run `traj-gen ARGS` from the work tree (test_install.py runs the installed script)."""
     return subprocess.run([sys.executable, '-m', 'traj_gen_ros.cli', *args], cwd=REPO,
                           env=env(), capture_output=True, text=True, timeout=TIMEOUT)
 
