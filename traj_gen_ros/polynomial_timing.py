@@ -35,7 +35,7 @@ from traj_gen_ros.polynomial import CUBIC_MATRIX, QUINTIC_MATRIX
 #: Shortest polynomial plan (s): shorter ones' coefficients ~ D/T⁵ overflow.
 SHORTEST_POLYNOMIAL = 1e-9
 _IMAGINARY_SLACK = 1e-6  # roots this close to the real axis count as real (double roots)
-_FIRST_BATCH = 4  # joints analysed exactly at first (the largest lower bounds)
+_FIRST_BATCH = 16  # joints analysed exactly at first (the largest lower bounds)
 
 
 def _columns(matrix: np.ndarray, columns: tuple[int | None, ...]) -> np.ndarray:
@@ -317,11 +317,13 @@ def _feasible(profile: str, displacement: np.ndarray, start_velocity: np.ndarray
         (start_acceleration * durations**2)[:, None] * shapes[1] + \
         displacement[:, None] * shapes[2]
     # In normalised time: peak |v| = max|x'(τ)|/T, peak |a| = max|x''(τ)|/T².
-    velocity = position[:, 1:] * np.arange(1, 6)
-    acceleration = velocity[:, 1:] * np.arange(1, 5)
+    derivatives = np.zeros((2, durations.size, 5))
+    derivatives[0] = position[:, 1:] * np.arange(1, 6)
+    derivatives[1, :, :4] = derivatives[0, :, 1:] * np.arange(1, 5)
+    peaks = _unit_peaks(derivatives.reshape(-1, 5)).reshape(2, -1)
     slack = 1.0 + LIMIT_TOLERANCE
-    return (_unit_peaks(velocity) <= max_velocity * durations * slack) & \
-        (_unit_peaks(acceleration) <= max_acceleration * durations**2 * slack)
+    return (peaks[0] <= max_velocity * durations * slack) & \
+        (peaks[1] <= max_acceleration * durations**2 * slack)
 
 
 class FeasibleDurations:
