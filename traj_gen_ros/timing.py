@@ -10,8 +10,10 @@ Rest-to-rest peaks (distance ``D``, duration ``T``), used in closed form:
   triangle ``T = 2 sqrt(D/a)``.
 - cubic eq. (6): peak velocity ``1.5 D/T``, peak acceleration ``6 D/T²``.
 - quintic: peak velocity ``15/8 D/T``, peak acceleration ``10/sqrt(3) D/T²``.
-From a moving start (an extension for replanning) the duration is found by bisection on
-the exact peaks of the planned trajectory.
+From a moving start (an extension for replanning) the duration is computed exactly:
+LSPB in closed form (:mod:`traj_gen_ros.second_order`), cubic and quintic from each joint's
+set of feasible durations (:mod:`traj_gen_ros.polynomial_timing`). Via-point paths are
+stretched by one factor, found by bisection on exact peaks (:func:`shortest_duration`).
 """
 
 from __future__ import annotations
