@@ -31,6 +31,7 @@ import numpy as np
 from traj_gen_ros import second_order
 from traj_gen_ros.limits import LIMIT_TOLERANCE
 from traj_gen_ros.polynomial import CUBIC_MATRIX, QUINTIC_MATRIX
+from traj_gen_ros.polynomial_peaks import derivative, evaluate, unit_peaks
 
 #: Shortest polynomial plan (s): shorter ones' coefficients ~ D/T⁵ overflow.
 SHORTEST_POLYNOMIAL = 1e-9
@@ -51,16 +52,6 @@ _SHAPES = {
     'cubic': _columns(CUBIC_MATRIX, (1, None, 2)),
     'quintic': _columns(QUINTIC_MATRIX, (1, 2, 3)),
 }
-
-
-def _derivative(coefficients: np.ndarray, order: int = 1) -> np.ndarray:
-    """d/dτ of ascending coefficients along the last axis, keeping the length."""
-    for _ in range(order):
-        powers = np.arange(1, coefficients.shape[-1])
-        shifted = np.zeros_like(coefficients)
-        shifted[..., :-1] = coefficients[..., 1:] * powers
-        coefficients = shifted
-    return coefficients
 
 
 def _multiply(first: np.ndarray, second: np.ndarray) -> np.ndarray:
@@ -87,7 +78,7 @@ def _quadratics(profile: str, order: int, displacement: np.ndarray, start_veloci
     ``order`` 1: ``T v - σ V T``; order 2: ``T² a - σ A T²``. Shaped
     ``(2 signs, joints, 3 powers of T, 6 powers of τ)``.
     """
-    shapes = _derivative(_SHAPES[profile], order)
+    shapes = derivative(_SHAPES[profile], order)
     coefficients = np.empty((2, displacement.size, 3, 6))
     coefficients[:, :, 0] = start_acceleration[:, None] * shapes[1]
     coefficients[:, :, 1] = start_velocity[:, None] * shapes[0]
@@ -195,14 +186,6 @@ def _positive_roots(p2: np.ndarray, p1: np.ndarray, p0: np.ndarray) -> np.ndarra
     return np.where(np.isfinite(roots) & (roots > 0.0), roots, np.nan)
 
 
-def _evaluate(polynomials: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Ascending polynomials ``(..., n)`` at ``points`` broadcast against ``(...)``."""
-    value = np.zeros(np.broadcast_shapes(polynomials.shape[:-1], points.shape))
-    for power in range(polynomials.shape[-1] - 1, -1, -1):
-        value = value * points + polynomials[..., power]
-    return value
-
-
 def _pad(polynomials: np.ndarray, size: int) -> np.ndarray:
     """Pad ascending coefficients with zeros to ``size``."""
     padded = np.zeros(polynomials.shape[:-1] + (size,))
@@ -219,7 +202,7 @@ def _candidates(profile: str, displacement: np.ndarray, start_velocity: np.ndarr
     p = np.stack([_quadratics(profile, order, displacement, start_velocity,
                               start_acceleration, limit)
                   for order, limit in ((1, max_velocity), (2, max_acceleration))])
-    q = _derivative(p)
+    q = derivative(p)
     owner = np.broadcast_to(np.arange(joints)[:, None], p.shape[:3] + (3,))
     # The limit met at an end, τ = 0 or 1 (p(0) is the constant term, p(1) the sum), or
     # an extremum entering at an end (q = 0 there: where an end sits at the limit for
@@ -239,7 +222,7 @@ def _candidates(profile: str, displacement: np.ndarray, start_velocity: np.ndarr
     resultants = np.where(no_square[:, None, :, None], linear, general)
     resultants = np.where(no_constant[:, None, :, None], without_t, resultants)
     taus, rows = _roots_in_unit_interval(resultants.reshape(-1, size))
-    at_taus = _evaluate(p.reshape(-1, 3, 6)[rows], taus[:, None])
+    at_taus = evaluate(p.reshape(-1, 3, 6)[rows], taus[:, None])
     interior = _positive_roots(at_taus[:, 0], at_taus[:, 1], at_taus[:, 2])
     interior_owner = rows % joints
     durations = np.concatenate([end_roots.reshape(-1), interior.reshape(-1)])
@@ -248,69 +231,10 @@ def _candidates(profile: str, displacement: np.ndarray, start_velocity: np.ndarr
     return durations[keep], owners[keep]
 
 
-def _unit_peaks(polynomials: np.ndarray) -> np.ndarray:
-    """
-    Largest ``|p(τ)|`` on ``[0, 1]`` of ascending polynomials ``(count, n)``, ``n ≤ 5``.
-
-    Extrema lie at the ends or at the real roots of ``p'`` (degree ≤ 3), found in closed
-    form (:func:`_real_roots`) and polished by two Newton steps.
-    """
-    slope = _derivative(polynomials)[:, :4]
-    points = np.clip(np.nan_to_num(_real_roots(slope), nan=0.0), 0.0, 1.0)
-    curvature = _derivative(slope)
-    for _ in range(2):
-        bend = _evaluate(curvature[:, None, :], points)
-        step = _evaluate(slope[:, None, :], points) / np.where(bend == 0.0, 1.0, bend)
-        points = np.clip(points - np.where(bend == 0.0, 0.0, step), 0.0, 1.0)
-    points = np.concatenate([points, np.zeros((len(points), 1)), np.ones((len(points), 1))],
-                            axis=1)
-    return np.abs(_evaluate(polynomials[:, None, :], points)).max(axis=1)
-
-
-def _real_roots(cubics: np.ndarray) -> np.ndarray:
-    """
-    Real roots of ascending ``c0 + c1 τ + c2 τ² + c3 τ³`` (rows), ``(count, 3)``, NaN if fewer.
-
-    Cardano's formula (one real root) or the trigonometric one (three), for the depressed
-    cubic ``t³ + p t + q`` with ``τ = t - c2/(3 c3)``; rows whose cubic term is negligible
-    (1e-9 of the largest) take the stable quadratic formula instead.
-    """
-    c0, c1, c2, c3 = cubics.T
-    scale = np.max(np.abs(cubics), axis=1)
-    cubic = np.abs(c3) > 1e-9 * scale
-    roots = np.full((len(cubics), 3), np.nan)
-    with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
-        a, b, c = c2 / c3, c1 / c3, c0 / c3
-        p = b - a * a / 3.0
-        q = 2.0 * a**3 / 27.0 - a * b / 3.0 + c
-        discriminant = (0.5 * q) ** 2 + (p / 3.0) ** 3
-        root = np.sqrt(np.maximum(discriminant, 0.0))
-        one = np.cbrt(-0.5 * q + root) + np.cbrt(-0.5 * q - root) - a / 3.0
-        radius = 2.0 * np.sqrt(np.maximum(-p / 3.0, 0.0))
-        angle = np.arccos(np.clip(3.0 * q / (p * radius), -1.0, 1.0)) / 3.0
-        three = radius[:, None] * np.cos(angle[:, None] - 2.0 * np.pi * np.arange(3) / 3.0) \
-            - a[:, None] / 3.0
-        single = cubic & (discriminant > 0.0)
-        roots[single, 0] = one[single]
-        triple = cubic & (discriminant <= 0.0) & (p < 0.0)
-        roots[triple] = three[triple]
-        flat = cubic & (discriminant <= 0.0) & (p >= 0.0)  # p = q = 0: a triple root
-        roots[flat, 0] = -a[flat] / 3.0
-        # Quadratic (or linear) rows: c0 + c1 τ + c2 τ².
-        quadratic = ~cubic
-        inner = c1 * c1 - 4.0 * c2 * c0
-        half = -0.5 * (c1 + np.copysign(np.sqrt(np.maximum(inner, 0.0)), c1))
-        pair = quadratic & (inner >= 0.0) & (np.abs(c2) > 1e-12 * scale)
-        roots[pair, 0] = (half / c2)[pair]
-        roots[pair, 1] = (c0 / half)[pair]
-        line = quadratic & (np.abs(c2) <= 1e-12 * scale)
-        roots[line, 0] = (-c0 / c1)[line]
-    return np.where(np.isfinite(roots), roots, np.nan)
-
-
 def _feasible(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
               start_acceleration: np.ndarray, max_velocity: np.ndarray,
-              max_acceleration: np.ndarray, durations: np.ndarray) -> np.ndarray:
+              max_acceleration: np.ndarray, durations: np.ndarray,
+              tolerance: float = LIMIT_TOLERANCE) -> np.ndarray:
     """Whether each move (flat arrays) stays within its limits in its duration (exact peaks)."""
     shapes = _SHAPES[profile]
     position = (start_velocity * durations)[:, None] * shapes[0] + \
@@ -320,8 +244,8 @@ def _feasible(profile: str, displacement: np.ndarray, start_velocity: np.ndarray
     derivatives = np.zeros((2, durations.size, 5))
     derivatives[0] = position[:, 1:] * np.arange(1, 6)
     derivatives[1, :, :4] = derivatives[0, :, 1:] * np.arange(1, 5)
-    peaks = _unit_peaks(derivatives.reshape(-1, 5)).reshape(2, -1)
-    slack = 1.0 + LIMIT_TOLERANCE
+    peaks = unit_peaks(derivatives.reshape(-1, 5)).reshape(2, -1)
+    slack = 1.0 + tolerance
     return (peaks[0] <= max_velocity * durations * slack) & \
         (peaks[1] <= max_acceleration * durations**2 * slack)
 
@@ -332,16 +256,15 @@ class FeasibleDurations:
 
     ``points`` are the sorted candidates (the first is ``SHORTEST_POLYNOMIAL``);
     ``feasible[k]`` says whether ``points[k]`` is feasible, ``after[k]`` whether the open
-    gap after it is (the last gap runs to infinity). A point next to a feasible gap is
-    feasible: the set is closed.
+    gap after it is (the last gap runs to infinity). The end points of a feasible gap are
+    feasible (the set is closed; :func:`_polish_boundaries` makes them so to rounding).
     """
 
     def __init__(self, points: np.ndarray, at_point: np.ndarray, after: np.ndarray) -> None:
         """Keep the candidates and their feasibility."""
         self.points = points
         self.after = after
-        before = np.concatenate([[False], after[:-1]])
-        self.feasible = at_point | after | before
+        self.feasible = at_point
 
     def first_from(self, duration: float) -> float | None:
         """Return the smallest feasible duration ``>= duration`` (``>= points[0]``), or None."""
@@ -378,9 +301,47 @@ def feasible_durations(profile: str, displacement: np.ndarray, start_velocity: n
                          start_acceleration[who], max_velocity[who], max_acceleration[who],
                          tests)
     at_point, after = feasible[:durations.size], feasible[durations.size:]
+    moves = (profile, displacement, start_velocity, start_acceleration, max_velocity,
+             max_acceleration)
+    _polish_boundaries(moves, durations, owners, gaps, at_point, after)
     bounds = np.searchsorted(owners, np.arange(joints + 1))
     return [FeasibleDurations(durations[a:b], at_point[a:b], after[a:b])
             for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
+def _polish_boundaries(moves: tuple, durations: np.ndarray, owners: np.ndarray,
+                       gaps: np.ndarray, at_point: np.ndarray, after: np.ndarray) -> None:
+    """
+    Move boundary candidates that rounding left just outside their feasible gap onto it.
+
+    A candidate next to a feasible gap is, exactly, the gap's closed end; rounding in the
+    roots can leave it a hair outside (the peak over by ~1e-6). Each such candidate is
+    bisected towards its gap's test duration with the exact check, 48 halvings, and
+    replaced by the feasible end of the bracket (in place; the order is kept).
+    """
+    first = np.ones(durations.size, dtype=bool)
+    first[1:] = owners[1:] != owners[:-1]
+    before = np.where(first, False, np.roll(after, 1))
+    rising = ~at_point & after
+    falling = ~at_point & before & ~rising
+    index = np.flatnonzero(rising | falling)
+    if not index.size:
+        return
+    profile, displacement, start_velocity, start_acceleration, max_velocity, \
+        max_acceleration = moves
+    who = owners[index]
+    bad = durations[index]
+    good = np.where(rising[index], gaps[index], gaps[index - 1])
+    for _ in range(48):
+        middle = 0.5 * (bad + good)
+        # Half the tolerance: the plan's own peaks, evaluated in real time, round apart.
+        fits = _feasible(profile, displacement[who], start_velocity[who],
+                         start_acceleration[who], max_velocity[who], max_acceleration[who],
+                         middle, 0.5 * LIMIT_TOLERANCE)
+        good = np.where(fits, middle, good)
+        bad = np.where(fits, bad, middle)
+    durations[index] = good
+    at_point[index] = True
 
 
 def synchronised_duration(joint_sets: list[FeasibleDurations]) -> float | None:
