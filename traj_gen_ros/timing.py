@@ -250,7 +250,7 @@ def via_durations(
     steps = np.abs(np.diff(path, axis=0))
     base = rest_to_rest_times(steps, max_velocity, max_acceleration, profile).max(axis=1)
     if np.max(steps) <= 1e-12 * max(1.0, float(np.max(np.abs(path)))):
-        raise ValueError('every via point equals the start (to 1e-12 of the path\'s scale): '
+        raise ValueError("every via point equals the start (to 1e-12 of the path's scale): "
                          'there is nothing to move')
     base = np.maximum(base, 1e-6 * base.max())
     planners = {
