@@ -15,7 +15,7 @@ setup(
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', glob('config/*.yaml')),
     ],
-    install_requires=['setuptools', 'numpy'],
+    install_requires=['setuptools', 'numpy', 'ruckig'],
     zip_safe=True,
     maintainer='traj_gen_ros maintainers',
     maintainer_email='maintainers@traj-gen-ros.org',
