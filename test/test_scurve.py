@@ -1,9 +1,10 @@
 """Jerk-limited S-curve moves (traj_gen_ros.scurve) against Ruckig as the oracle."""
 
+import math
 import re
 
 import core_helpers as helpers
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 import hypothesis.strategies as st
 import numpy as np
 import pytest
@@ -30,9 +31,23 @@ def ruckig_duration(q0, qf, v0, a0, vmax, amax, jmax, minimum=None, vf=None):
     if minimum is not None:
         parameters.minimum_duration = minimum
     solution = ruckig.Trajectory(joints)
-    result = ruckig.Ruckig(joints).calculate(parameters, solution)
+    try:
+        result = ruckig.Ruckig(joints).calculate(parameters, solution)
+    except ValueError as error:  # Ruckig's -101: a duration above its ~7.6e3 s
+        assert '-101' in str(error)
+        return None, None
+    except ruckig.RuckigError:  # a numerically extreme request: no reference value
+        return math.nan, None
     assert result == ruckig.Result.Working
     return solution.duration, solution
+
+
+def assert_ruckigs_duration(plan, expected):
+    """Ruckig's duration to 1e-9, or, where Ruckig refuses (-101), a long one."""
+    if expected is None:
+        assert plan.duration > 7.6e3
+    elif not math.isnan(expected):
+        assert plan.duration == pytest.approx(expected, rel=TOL, abs=0.0)
 
 
 def decade_limits(draw, joints):
@@ -61,6 +76,18 @@ def moves(draw, moving=True):
     return q0, qf, v0, a0, vmax, amax, jmax
 
 
+def resolution(plan, jmax, amax):
+    """
+    Return the slack in acceleration and velocity that the breakpoints' resolution allows.
+
+    Breakpoints are absolute times, so a piece's length is known to ``ulp(duration)``:
+    a jerk phase then ends up to ``j_max ulp`` off in acceleration (``a_max ulp`` in
+    velocity). Negligible unless the duration is ~1e8 times ``a_max / j_max``.
+    """
+    step = 4.0 * np.spacing(plan.duration)
+    return jmax * step, amax * step
+
+
 def check_plan(plan, q0, qf, v0, a0, vmax, amax, jmax):
     """Limits, continuity, exact start, rest at the goal: all to 1e-9 relative."""
     assert plan.degree == 3
@@ -68,12 +95,15 @@ def check_plan(plan, q0, qf, v0, a0, vmax, amax, jmax):
     assert np.all(np.diff(plan.breakpoints, axis=0) >= 0.0)
     assert np.all(plan.breakpoints[-1] == plan.duration)
     peak_velocity, peak_acceleration = helpers.reference_peaks(plan)
-    assert np.all(peak_velocity <= vmax * (1 + TOL)), (peak_velocity, vmax)
-    assert np.all(peak_acceleration <= amax * (1 + TOL)), (peak_acceleration, amax)
+    acceleration_slack, velocity_slack = resolution(plan, jmax, amax)
+    assert np.all(peak_velocity <= vmax * (1 + TOL) + velocity_slack), (peak_velocity, vmax)
+    assert np.all(peak_acceleration <= amax * (1 + TOL) + acceleration_slack), (
+        peak_acceleration, amax)
     assert np.all(peak_jerk(plan) <= jmax * (1 + TOL)), (peak_jerk(plan), jmax)
     jumps, scales = helpers.boundary_jumps(plan)
     scale = np.stack([np.maximum(np.abs(qf - q0), 1.0), vmax, amax])[:, None, :]
-    assert np.all(np.abs(jumps) <= TOL * np.maximum(scales, scale)), jumps
+    slack = np.stack([np.zeros_like(vmax), velocity_slack, acceleration_slack])[:, None, :]
+    assert np.all(np.abs(jumps) <= TOL * np.maximum(scales, scale) + slack), jumps
     position, velocity, acceleration = plan.sample(0.0)
     assert np.array_equal(position[0], q0) and np.array_equal(velocity[0], v0)
     # Exact: the piece stores a0/2, which is exact except for subnormal a0.
@@ -92,16 +122,21 @@ def check_plan(plan, q0, qf, v0, a0, vmax, amax, jmax):
 def test_rest_to_rest_duration_is_ruckigs_and_within_limits(move):
     plan = scurve_min_time(*move)
     expected, _ = ruckig_duration(*move)
-    assert plan.duration == pytest.approx(expected, rel=TOL, abs=0.0)
+    assert_ruckigs_duration(plan, expected)
     check_plan(plan, *move)
 
 
 @FAST
 @given(moves())
 def test_moving_start_duration_is_ruckigs_and_within_limits(move):
-    plan = scurve_min_time(*move)
     expected, _ = ruckig_duration(*move)
-    assert plan.duration == pytest.approx(expected, rel=TOL, abs=0.0)
+    try:
+        plan = scurve_min_time(*move)
+    except ValueError as error:  # only where Ruckig itself refuses, and named
+        assert (expected is None or math.isnan(expected)), error
+        assert 'no jerk-limited plan for' in str(error)
+        return
+    assert_ruckigs_duration(plan, expected)
     check_plan(plan, *move)
 
 
@@ -110,6 +145,7 @@ def test_moving_start_duration_is_ruckigs_and_within_limits(move):
 def test_pieces_equal_ruckigs_own_evaluation(move):
     plan = scurve_min_time(*move)
     _, solution = ruckig_duration(*move)
+    assume(solution is not None)
     times = np.linspace(0.0, plan.duration, 37)
     position, velocity, acceleration = plan.sample(times)
     reach = max(1.0, float(np.max(np.abs(move[:2]))))
@@ -151,6 +187,7 @@ def test_start_beyond_the_limits_brakes_first(v0, a0):
     assert plan.duration == pytest.approx(expected, rel=TOL, abs=0.0)
     assert plan.piece_count == 9  # two braking phases, then seven
     assert np.all(peak_jerk(plan) <= 4.0 * (1 + TOL))
+    helpers.assert_continuous(plan, orders=3)
     position, velocity, acceleration = plan.sample([0.0, plan.duration])
     assert position[0].tolist() == [0.0, 0.0] and velocity[0].tolist() == [v0, 0.0]
     assert acceleration[0].tolist() == [a0, 0.0]
@@ -165,7 +202,12 @@ def test_start_beyond_the_limits_brakes_first(v0, a0):
 @given(moves(), st.floats(1.0, 3.0))
 def test_fixed_duration_is_exact_and_within_limits(move, stretch):
     q0, qf, v0, a0, vmax, amax, jmax = move
-    shortest, _ = ruckig_duration(*move)
+    try:
+        shortest = scurve_min_time(*move).duration
+    except ValueError:  # only where Ruckig itself refuses
+        expected = ruckig_duration(*move)[0]
+        assert expected is None or math.isnan(expected)
+        return
     duration = max(shortest * stretch, 1e-3)
     try:
         plan = scurve(q0, qf, duration, vmax, amax, jmax, v0=v0, a0=a0)
@@ -223,8 +265,7 @@ def test_far_target_beyond_ruckigs_duration_limit_is_planned():
 def test_extreme_start_acceleration_ruckig_rejects_is_planned():
     arguments = (np.zeros(1), np.ones(1), np.zeros(1), np.array([1e3]), np.ones(1),
                  np.ones(1), np.ones(1))
-    with pytest.raises(ruckig.RuckigError):
-        ruckig_duration(*arguments)
+    assert math.isnan(ruckig_duration(*arguments)[0])  # Ruckig raises RuckigError
     plan = scurve_min_time(*arguments)
     assert np.isfinite(plan.coefficients).all() and plan.duration > 999.0
     position, velocity, acceleration = plan.sample([0.0, plan.duration])

@@ -17,18 +17,11 @@ from __future__ import annotations
 import numpy as np
 from traj_gen_ros import validation
 from traj_gen_ros.polynomial import heuristic_velocities
-from traj_gen_ros.scurve import (
-    _LIMIT_NAMES,
-    _Move,
-    fixed_duration,
-    minimum_duration,
-    plan_move,
-    round_up,
-)
+from traj_gen_ros.scurve import fixed_duration, round_up
+from traj_gen_ros.scurve_ruckig import LIMIT_NAMES, minimum_duration, Move, plan_move
 from traj_gen_ros.trajectory import Trajectory
 from traj_gen_ros.validation import ArrayLike
 
-_TOLERANCE = 1e-9  # relative: a segment this close to its duration meets it
 _SCALE_STEPS = 200  # bound on the halvings/doublings of the duration search
 _BISECTION_TOLERANCE = 1e-12
 _FIXED_POINT_STEPS = 30
@@ -185,7 +178,7 @@ def _validated(points: ArrayLike, durations: ArrayLike, max_velocity: ArrayLike,
     durations = validation.segment_durations(durations, len(path) - 1)
     joints = path.shape[1]
     limits = tuple(validation.positive_per_joint(name, value, joints) for name, value in
-                   zip(_LIMIT_NAMES, (max_velocity, max_acceleration, max_jerk), strict=True))
+                   zip(LIMIT_NAMES, (max_velocity, max_acceleration, max_jerk), strict=True))
     if isinstance(velocities, str):
         if velocities != 'heuristic':
             raise ValueError(f'velocities must be "heuristic" or an array (points, joints), '
@@ -213,11 +206,11 @@ def _check_velocities(via: np.ndarray, max_velocity: np.ndarray,
 
 
 def _segment(path: np.ndarray, via: np.ndarray, durations: np.ndarray, limits: tuple,
-             segment: int) -> _Move:
+             segment: int) -> Move:
     """Return segment ``segment`` as a fixed-duration state-to-state move."""
-    return _Move(path[segment].tolist(), path[segment + 1].tolist(), via[segment].tolist(),
-                 [0.0] * path.shape[1], via[segment + 1].tolist(),
-                 tuple(limit.tolist() for limit in limits), float(durations[segment]))
+    return Move(path[segment].tolist(), path[segment + 1].tolist(), via[segment].tolist(),
+                [0.0] * path.shape[1], via[segment + 1].tolist(),
+                tuple(limit.tolist() for limit in limits), float(durations[segment]))
 
 
 def _segment_feasible(path: np.ndarray, durations: np.ndarray, limits: tuple,

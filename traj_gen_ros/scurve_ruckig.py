@@ -1,0 +1,355 @@
+"""
+Ruckig as the backend of the S-curve profile: one state-to-state move, read into pieces.
+
+Ruckig (L. Berscheid and T. Kröger, "Jerk-limited Real-time Trajectory Generation with
+Arbitrary Target States", RSS 2021; the ``ruckig`` package, MIT) gives the time-optimal
+synchronised seven-phase profiles (and a braking pre-profile) per joint; each phase is
+rebuilt as a cubic ``[p, v, a/2, j/6]`` of the package's :class:`Trajectory`.
+
+Where Ruckig refuses (synchronised durations above ~7.6e3 s, numerically extreme
+ratios), the request is solved again: in scaled units (time by ``k``, a joint's positions
+by ``s``: velocity ``s/k``, acceleration ``s/k²``, jerk ``s/k³``, powers of two so that
+scaling back is exact), with lowered limits for joints far faster than the common
+duration, and finally composed per joint (stop, then a time-stretched rest-to-rest
+move). What still fails raises ``ValueError`` naming its input.
+
+Units: rad (or m), rad/s, rad/s², rad/s³, s.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import ruckig
+from traj_gen_ros import validation
+from traj_gen_ros.trajectory import Trajectory
+
+PHASES = 7  # jerk phases of one S-curve; braking adds two before them
+DURATION_TOLERANCE = 1e-13  # relative: a plan this close to the asked duration meets it
+_GOOD = (ruckig.Result.Working, ruckig.Result.Finished)
+_SMALLEST_RATIO = 2.0**-20  # lowered limits stay above this fraction (cubed for jerk)
+LIMIT_NAMES = ('max_velocity', 'max_acceleration', 'max_jerk')
+
+Floats = list[float]
+
+
+class Move:
+    """One state-to-state problem as Python floats, one list entry per joint."""
+
+    __slots__ = ('start', 'goal', 'v0', 'a0', 'vf', 'limits', 'duration')
+
+    def __init__(self, start: Floats, goal: Floats, v0: Floats, a0: Floats, vf: Floats,
+                 limits: tuple[Floats, Floats, Floats], duration: float | None) -> None:
+        self.start, self.goal, self.v0, self.a0, self.vf = start, goal, v0, a0, vf
+        self.limits = limits  # (v_max, a_max, j_max)
+        self.duration = duration  # the exact duration asked for, or None for minimum time
+
+    def joint(self, index: int) -> Move:
+        """Return the same problem for one joint alone."""
+        pick = slice(index, index + 1)
+        return Move(self.start[pick], self.goal[pick], self.v0[pick], self.a0[pick],
+                    self.vf[pick], tuple(limit[pick] for limit in self.limits),
+                    self.duration)
+
+
+def minimum_duration(move: Move) -> float:
+    """Return the time-optimal synchronised duration (s) of ``move``, ignoring its own."""
+    return plan_move(Move(move.start, move.goal, move.v0, move.a0, move.vf, move.limits,
+                          None))[1]
+
+
+def plan_move(move: Move) -> tuple[Trajectory, float]:
+    """
+    Solve ``move`` with Ruckig, directly then in scaled units; return it and its duration.
+
+    With ``move.duration`` set, the plan lasts at least that long (longer when that is
+    too short, or blocked). Raises ``ValueError`` when no attempt succeeds.
+    """
+    reason = ''
+    for variant, time_scale, position_scales, needed in _attempts(move):
+        solved = _calculate(variant, time_scale, position_scales)
+        if isinstance(solved, str):
+            reason = reason or solved
+        elif needed is None or solved[1] <= needed * (1.0 + DURATION_TOLERANCE):
+            return solved
+    composed = _composed(move)
+    if composed is not None:
+        return composed
+    raise ValueError(_failure_message(move, reason))
+
+
+def _composed(move: Move) -> tuple[Trajectory, float] | None:
+    """
+    Plan each joint alone and bring them to the common duration, when Ruckig cannot.
+
+    ``T`` is the requested duration, or the slowest joint's own minimum time (so the plan
+    stays time-optimal). A joint starting at rest runs its own optimal profile slowed by
+    ``σ = T/t`` (pieces ``σ`` times longer, coefficients ``c_n/σ^n``: within the limits,
+    arriving at ``T``); a moving one runs its own optimum, then holds the goal until
+    ``T``. Only for targets at rest; returns ``None`` when it does not apply.
+    """
+    joints = len(move.start)
+    if any(move.vf) or (move.duration is None and joints == 1):
+        return None
+    try:
+        own = [plan_move(Move(*_fields(move.joint(joint)), None)) for joint in range(joints)]
+    except ValueError:
+        return None
+    duration = move.duration or max(time for _, time in own)
+    if max(time for _, time in own) > duration * (1.0 + DURATION_TOLERANCE):
+        return None
+    columns = []
+    for joint, (plan, time) in enumerate(own):
+        times, coefficients = plan.breakpoints[:, 0], plan.coefficients[:, :, 0]
+        hold = np.array([[move.goal[joint], 0.0, 0.0, 0.0]])
+        if time > 0.0 and not (move.v0[joint] or move.a0[joint]):
+            stretch = duration / time
+            times = np.minimum(times * stretch, duration)
+            coefficients = coefficients / stretch ** np.arange(4.0)
+        else:
+            times = np.append(times, duration)
+            coefficients = np.concatenate([coefficients, hold])
+        times[-1] = duration
+        columns.append((times, coefficients, hold))
+    pieces = max(len(coefficients) for _, coefficients, _ in columns)
+    breakpoints = np.full((pieces + 1, joints), duration)
+    table = np.zeros((pieces, 4, joints))
+    for joint, (times, coefficients, hold) in enumerate(columns):
+        breakpoints[:len(times), joint] = times
+        table[:, :, joint] = hold  # zero-length padding at the end holds the goal
+        table[:len(coefficients), :, joint] = coefficients
+    return Trajectory(breakpoints, table), duration
+
+
+def _fields(move: Move) -> tuple:
+    """Return a move's boundary states and limits, the leading ``Move`` arguments."""
+    return move.start, move.goal, move.v0, move.a0, move.vf, move.limits
+
+
+def _attempts(move: Move):
+    """
+    Yield ``(move, time scale, position scales, duration it must keep or None)`` to try.
+
+    In order: Ruckig directly; time scaled; lowered limits for fast joints (see
+    :func:`_stretched`), time scaled; then the same with positions scaled too, last since
+    Ruckig's absolute precision (1e-8) then grows with the position scale.
+    """
+    for time_scale, position_scales in _scalings(move, positions=False):
+        yield move, time_scale, position_scales, None
+    stretched = list(_stretched(move))
+    for variant, duration in stretched:
+        for time_scale, position_scales in _scalings(variant, positions=False):
+            yield variant, time_scale, position_scales, duration
+    for variant, duration in [(move, None)] + stretched:
+        for time_scale, position_scales in _scalings(variant, positions=True):
+            yield variant, time_scale, position_scales, duration
+
+
+def _stretched(move: Move):
+    """
+    Yield ``move`` with lowered limits for joints far faster than the common duration.
+
+    Ruckig fails for a joint whose own minimum time ``t`` is far below the common
+    duration ``T`` (its jerk phases become vanishingly short in the synchronisation). Such
+    a joint may run under lower limits ``(ρ v, ρ² a, ρ³ j)``, ``ρ = min(1, 2^m t/T)`` (at
+    least 2^-20), never below its boundary velocities and start acceleration: any plan then is
+    within the original limits. For a joint at rest at both ends, ``m = 0`` is its own
+    optimal profile slowed to exactly ``T``, so the duration stays optimal. Yields
+    ``(move, T)``; a plan counts only if it keeps ``T``.
+    """
+    if move.duration is None and len(move.start) == 1:
+        return  # nothing to stretch (and this is what minimum_duration below calls)
+    try:
+        own = [minimum_duration(move.joint(joint)) for joint in range(len(move.start))]
+    except ValueError:
+        return
+    duration = move.duration or max(own)
+    for doubling in (0, 1, 3, 6):
+        limits = tuple(list(limit) for limit in move.limits)
+        for joint, time in enumerate(own):
+            ratio = min(1.0, max(2.0**doubling * time / duration, _SMALLEST_RATIO))
+            floors = (max(abs(move.v0[joint]), abs(move.vf[joint])), abs(move.a0[joint]), 0.0)
+            for power, (limit, floor) in enumerate(zip(limits, floors, strict=True), start=1):
+                limit[joint] = min(limit[joint], max(limit[joint] * ratio**power, floor))
+        yield Move(move.start, move.goal, move.v0, move.a0, move.vf, limits,
+                   move.duration), duration
+
+
+def _failure_message(move: Move, reason: str) -> str:
+    """Name the joint (or the synchronisation) that no Ruckig attempt could plan."""
+    subject = 'the synchronised move'
+    if len(move.start) > 1:
+        for joint in range(len(move.start)):
+            single = move.joint(joint)
+            if all(isinstance(_calculate(variant, k, s), str)
+                   for variant, k, s, _ in _attempts(single)):
+                subject = f'joint {joint}'
+                move = single
+                break
+    named = zip(LIMIT_NAMES, move.limits, strict=True)
+    limits = ', '.join(f'{name} {values}' for name, values in named)
+    timing = '' if move.duration is None else f' in {move.duration:g} s'
+    return (f'scurve: no jerk-limited plan for {subject}{timing} from position {move.start}, '
+            f'velocity {move.v0}, acceleration {move.a0} to position {move.goal}, velocity '
+            f'{move.vf} with {limits} ({reason}); the limits or the start state are too '
+            'extreme for each other')
+
+
+def _scalings(move: Move, positions: bool):
+    """
+    Yield ``(time scale k, per-joint position scales s)`` for Ruckig to try.
+
+    Without ``positions``: none, then ``k`` alone; with it: ``k`` and ``s``. ``k`` brings
+    the (estimated) duration near 1 s, ``s`` each joint's excursion near 1; both are
+    powers of two, so results scale back exactly.
+    """
+    if not positions:
+        yield 1.0, None
+    v_max, a_max, j_max = move.limits
+    if move.duration is not None:
+        estimate = move.duration
+    else:
+        rows = zip(move.start, move.goal, move.v0, move.a0, v_max, a_max, j_max, strict=True)
+        estimate = max(abs(goal - start) / v + v / a + a / j + abs(v0) / a + abs(a0) / j
+                       for start, goal, v0, a0, v, a, j in rows)
+    time_scale = _power_of_two(estimate)
+    if not positions:
+        yield time_scale, [1.0] * len(move.start)
+        return
+    extents = [abs(goal - start) + abs(v0) * time_scale + abs(a0) * time_scale**2
+               + abs(vf) * time_scale
+               for start, goal, v0, a0, vf in zip(move.start, move.goal, move.v0, move.a0,
+                                                  move.vf, strict=True)]
+    yield time_scale, [_power_of_two(extent) for extent in extents]
+
+
+def _power_of_two(value: float) -> float:
+    """Return the power of two nearest ``value`` (1 for 0 or non-finite values)."""
+    if not (math.isfinite(value) and value > 0.0):
+        return 1.0
+    return math.ldexp(1.0, max(-900, min(900, round(math.log2(value)))))
+
+
+def _calculate(move: Move, time_scale: float,
+               position_scales: Floats | None) -> tuple[Trajectory, float] | str:
+    """
+    Run Ruckig once in units scaled by ``time_scale`` and ``position_scales``.
+
+    ``position_scales`` ``None`` passes positions unchanged (no shift); otherwise each
+    joint is shifted to start at 0 and scaled. Returns the trajectory in the caller's
+    units and its duration, or a string saying why Ruckig gave none.
+    """
+    joints = len(move.start)
+    k = time_scale
+    scales = position_scales or [1.0] * joints
+    shifts = move.start if position_scales is not None else [0.0] * joints
+    v_max, a_max, j_max = move.limits
+    parameters = ruckig.InputParameter(joints)
+
+    def scaled(values: Floats, power: int) -> Floats:
+        """Convert rad/s**power to scaled units: times k**power, divided by s."""
+        factor = k**power
+        return [value * factor / scale for value, scale in zip(values, scales, strict=True)]
+
+    try:
+        start = [q - c for q, c in zip(move.start, shifts, strict=True)]
+        goal = [q - c for q, c in zip(move.goal, shifts, strict=True)]
+        parameters.current_position, parameters.target_position = (scaled(start, 0),
+                                                                   scaled(goal, 0))
+        parameters.current_velocity = scaled(move.v0, 1)
+        parameters.current_acceleration = scaled(move.a0, 2)
+        parameters.target_velocity = scaled(move.vf, 1)
+        parameters.target_acceleration = [0.0] * joints
+        parameters.max_velocity = scaled(v_max, 1)
+        parameters.max_acceleration = scaled(a_max, 2)
+        parameters.max_jerk = scaled(j_max, 3)
+        if move.duration is not None:
+            parameters.minimum_duration = move.duration / k
+        solution = ruckig.Trajectory(joints)
+        result = ruckig.Ruckig(joints).calculate(parameters, solution)
+    except (ruckig.RuckigError, ValueError, OverflowError) as error:
+        # Ruckig raises on some inputs; an unknown result code (-101: duration above
+        # ~7.6e3 s) surfaces as the enum's ValueError.
+        return f'Ruckig: {" ".join(str(error).split())[:120]}'
+    if result not in _GOOD:
+        return f'Ruckig: {result.name}'
+    duration = solution.duration * k
+    if not math.isfinite(duration):
+        return 'Ruckig gave a non-finite duration'
+    if move.duration is not None and duration <= move.duration * (1 + DURATION_TOLERANCE):
+        duration = move.duration  # met: the last breakpoint is exactly the duration asked
+    built = _build(solution.profiles[0], duration, k, scales, shifts, move)
+    if built is None:
+        return 'the plan overflows in these units'
+    if position_scales is not None and max(scales) > 1.0 and not _arrives(built, move):
+        return 'Ruckig is not precise enough in these units'
+    return built, duration
+
+
+def _arrives(trajectory: Trajectory, move: Move) -> bool:
+    """
+    Tell whether a plan ends at the goal state as precisely as Ruckig does unscaled.
+
+    Ruckig's precision is absolute (1e-8 in position and velocity); scaling positions by
+    ``s`` widens it by ``s``, so such a plan is kept only if it still arrives within
+    ``1e-8`` plus ``1e-9`` of the positions' or the limit's magnitude.
+    """
+    position, velocity, _ = trajectory.sample(trajectory.duration)
+    reach = np.maximum(np.maximum(np.abs(move.start), np.abs(move.goal)), 1.0)
+    return (validation.every(np.abs(position[0] - move.goal) <= 1e-8 + 1e-9 * reach)
+            and validation.every(np.abs(velocity[0] - move.vf)
+                                 <= 1e-8 + 1e-9 * np.asarray(move.limits[0])))
+
+
+def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Floats,
+           move: Move) -> Trajectory | None:
+    """
+    Rebuild each joint's phases as cubic pieces ``[p, v, a/2, j/6]`` in the caller's units.
+
+    Braking phases (``profile.brake``) come first when any joint brakes; a joint that does
+    not brake gets two zero-length pieces there. Returns ``None`` if anything is not finite.
+    """
+    braking = any(profile.brake.duration > 0.0 for profile in profiles)
+    times: list[float] = []
+    values: list[float] = []
+    for joint, profile in enumerate(profiles):
+        scale, shift = scales[joint], shifts[joint]
+        factors = (scale, scale / k, 0.5 * scale / (k * k), scale / (6.0 * k * k * k))
+        phases = []
+        if braking:
+            brake = profile.brake
+            lengths, jerks, accelerations = brake.t, brake.j, brake.a
+            velocities, positions = brake.v, brake.p
+            if lengths[1] == 0.0:  # an unused second phase holds zeros: give it its state
+                jerks, accelerations = [jerks[0], 0.0], [accelerations[0], profile.a[0]]
+                velocities = [velocities[0], profile.v[0]]
+                positions = [positions[0], profile.p[0]]
+            phases.append((lengths, jerks, accelerations, velocities, positions, 2))
+        phases.append((profile.t, profile.j, profile.a, profile.v, profile.p, PHASES))
+        clock = 0.0
+        times.append(clock)
+        for lengths, jerks, accelerations, velocities, positions, count in phases:
+            for phase in range(count):
+                values += (positions[phase] * factors[0] + shift,
+                           velocities[phase] * factors[1],
+                           accelerations[phase] * factors[2], jerks[phase] * factors[3])
+                clock = min(clock + lengths[phase] * k, duration)
+                times.append(clock)
+        times[-1] = duration
+        # Every piece that starts at 0 (the first, and any zero-length ones after it) starts
+        # exactly at the given state, not at Ruckig's rounded copy of it.
+        pieces = PHASES + 2 * braking
+        first, clock_index = len(values) - 4 * pieces, len(times) - pieces - 1
+        for piece in range(pieces):
+            if times[clock_index + piece] != 0.0:
+                break
+            values[first + 4 * piece:first + 4 * piece + 3] = (
+                move.start[joint], move.v0[joint], 0.5 * move.a0[joint])
+    joints = len(profiles)
+    coefficients = np.array(values).reshape(joints, -1, 4).transpose(1, 2, 0)
+    breakpoints = np.array(times).reshape(joints, -1).T
+    if not (validation.every(np.isfinite(coefficients))
+            and validation.every(np.isfinite(breakpoints))):
+        return None
+    return Trajectory(np.ascontiguousarray(breakpoints), np.ascontiguousarray(coefficients))
