@@ -253,17 +253,23 @@ def _calculate(move: Move, time_scale: float,
         return [value * factor / scale for value, scale in zip(values, scales, strict=True)]
 
     try:
-        start = [q - c for q, c in zip(move.start, shifts, strict=True)]
-        goal = [q - c for q, c in zip(move.goal, shifts, strict=True)]
-        parameters.current_position, parameters.target_position = (scaled(start, 0),
-                                                                   scaled(goal, 0))
-        parameters.current_velocity = scaled(move.v0, 1)
-        parameters.current_acceleration = scaled(move.a0, 2)
-        parameters.target_velocity = scaled(move.vf, 1)
-        parameters.target_acceleration = [0.0] * joints
-        parameters.max_velocity = scaled(v_max, 1)
-        parameters.max_acceleration = scaled(a_max, 2)
-        parameters.max_jerk = scaled(j_max, 3)
+        if k == 1.0 and position_scales is None:  # as given
+            parameters.current_position, parameters.target_position = move.start, move.goal
+            parameters.current_velocity, parameters.current_acceleration = move.v0, move.a0
+            parameters.target_velocity = move.vf
+            parameters.max_velocity, parameters.max_acceleration = v_max, a_max
+            parameters.max_jerk = j_max
+        else:
+            start = [q - c for q, c in zip(move.start, shifts, strict=True)]
+            goal = [q - c for q, c in zip(move.goal, shifts, strict=True)]
+            parameters.current_position, parameters.target_position = (scaled(start, 0),
+                                                                       scaled(goal, 0))
+            parameters.current_velocity = scaled(move.v0, 1)
+            parameters.current_acceleration = scaled(move.a0, 2)
+            parameters.target_velocity = scaled(move.vf, 1)
+            parameters.max_velocity = scaled(v_max, 1)
+            parameters.max_acceleration = scaled(a_max, 2)
+            parameters.max_jerk = scaled(j_max, 3)
         if move.duration is not None:
             parameters.minimum_duration = move.duration / k
         solution = ruckig.Trajectory(joints)
@@ -308,48 +314,49 @@ def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Fl
     Rebuild each joint's phases as cubic pieces ``[p, v, a/2, j/6]`` in the caller's units.
 
     Braking phases (``profile.brake``) come first when any joint brakes; a joint that does
-    not brake gets two zero-length pieces there. Returns ``None`` if anything is not finite.
+    not brake gets two zero-length pieces there. Piece ends are the running sums of the
+    phase durations, clipped to ``duration``. Returns ``None`` if anything is not finite.
     """
     braking = any(profile.brake.duration > 0.0 for profile in profiles)
-    times: list[float] = []
-    values: list[float] = []
-    for joint, profile in enumerate(profiles):
-        scale, shift = scales[joint], shifts[joint]
-        factors = (scale, scale / k, 0.5 * scale / (k * k), scale / (6.0 * k * k * k))
-        phases = []
+    rows = []
+    for profile in profiles:
+        positions, velocities, accelerations = profile.p, profile.v, profile.a
         if braking:
             brake = profile.brake
-            lengths, jerks, accelerations = brake.t, brake.j, brake.a
-            velocities, positions = brake.v, brake.p
+            lengths, jerks = brake.t, brake.j
+            start = (brake.p, brake.v, brake.a)
             if lengths[1] == 0.0:  # an unused second phase holds zeros: give it its state
-                jerks, accelerations = [jerks[0], 0.0], [accelerations[0], profile.a[0]]
-                velocities = [velocities[0], profile.v[0]]
-                positions = [positions[0], profile.p[0]]
-            phases.append((lengths, jerks, accelerations, velocities, positions, 2))
-        phases.append((profile.t, profile.j, profile.a, profile.v, profile.p, PHASES))
-        clock = 0.0
-        times.append(clock)
-        for lengths, jerks, accelerations, velocities, positions, count in phases:
-            for phase in range(count):
-                values += (positions[phase] * factors[0] + shift,
-                           velocities[phase] * factors[1],
-                           accelerations[phase] * factors[2], jerks[phase] * factors[3])
-                clock = min(clock + lengths[phase] * k, duration)
-                times.append(clock)
-        times[-1] = duration
-        # Every piece that starts at 0 (the first, and any zero-length ones after it) starts
-        # exactly at the given state, not at Ruckig's rounded copy of it.
-        pieces = PHASES + 2 * braking
-        first, clock_index = len(values) - 4 * pieces, len(times) - pieces - 1
-        for piece in range(pieces):
-            if times[clock_index + piece] != 0.0:
-                break
-            values[first + 4 * piece:first + 4 * piece + 3] = (
-                move.start[joint], move.v0[joint], 0.5 * move.a0[joint])
-    joints = len(profiles)
-    coefficients = np.array(values).reshape(joints, -1, 4).transpose(1, 2, 0)
-    breakpoints = np.array(times).reshape(joints, -1).T
+                jerks = [jerks[0], 0.0]
+                start = [[values[0], following[0]] for values, following in
+                         zip(start, (positions, velocities, accelerations), strict=True)]
+            rows.append((start[0] + positions[:PHASES], start[1] + velocities[:PHASES],
+                         start[2] + accelerations[:PHASES], jerks + profile.j,
+                         lengths + profile.t))
+        else:
+            rows.append((positions[:PHASES], velocities[:PHASES], accelerations[:PHASES],
+                         profile.j, profile.t))
+    table = np.array(rows).transpose(2, 1, 0)  # (pieces, p v a j t, joints)
+    if k == 1.0 and not any(shifts) and scales.count(1.0) == len(scales):
+        table[:, 2] *= 0.5
+        table[:, 3] *= 1.0 / 6.0
+    else:
+        scale = np.array(scales)
+        table[:, :4] *= scale / np.array([[1.0], [k], [2.0 * k * k], [6.0 * k**3]])
+        table[:, 0] += shifts
+        table[:, 4] *= k
+    breakpoints = np.empty((len(table) + 1, len(profiles)))
+    breakpoints[0] = 0.0
+    np.minimum(np.cumsum(table[:, 4], axis=0), duration, out=breakpoints[1:])
+    breakpoints[-1] = duration
+    coefficients = np.ascontiguousarray(table[:, :4])
+    # Every piece that starts at 0 (the first, and any zero-length ones after it) starts
+    # exactly at the given state, not at Ruckig's rounded copy of it.
+    coefficients[0, :3] = move.start, move.v0, move.a0
+    coefficients[0, 2] *= 0.5
+    if not validation.every(breakpoints[1]):
+        initial = (breakpoints[:-1] == 0.0)[:, None, :] & (np.arange(4) < 3)[None, :, None]
+        coefficients = np.where(initial, coefficients[:1], coefficients)
     if not (validation.every(np.isfinite(coefficients))
             and validation.every(np.isfinite(breakpoints))):
         return None
-    return Trajectory(np.ascontiguousarray(breakpoints), np.ascontiguousarray(coefficients))
+    return Trajectory(breakpoints, coefficients)
