@@ -167,3 +167,23 @@ def test_far_via_path_beyond_ruckigs_duration_limit():
     assert durations.sum() > 7.6e3
     plan = scurve_via(points, durations, 0.1, 0.1, 0.1)
     check_path(plan, points, durations, np.full(2, 0.1), np.full(2, 0.1), np.full(2, 0.1))
+
+
+def test_blocked_segment_duration_is_named_with_the_next_that_works():
+    # Moving on at both ends, this segment can take 0.6745 s, or 2.6713 s and more:
+    # in between it would overshoot or stop short (a blocked interval of Ruckig's).
+    points = np.array([0.0, -0.21405911208958206])
+    velocities = np.array([[-0.30229684569688664], [-0.3039605292834877]])
+    shortest, _ = ruckig_duration(points[:1], points[1:], velocities[0], [0.0], [1.0], [1.0],
+                                  [1.0], vf=velocities[1])
+    with pytest.raises(ValueError, match='blocked duration interval of joint 0') as refusal:
+        scurve_via(points, [1.5], 1.0, 1.0, 1.0, velocities)
+    message = str(refusal.value)
+    minimum = float(re.search(r'minimum duration is ([0-9.]+) s', message)[1])
+    following = float(re.search(r'next one that works is ([0-9.]+) s', message)[1])
+    assert shortest <= minimum <= shortest * (1 + 1e-8)
+    assert 2.6 < following < 2.7
+    limits = np.ones(1), np.ones(1), np.ones(1)
+    for duration in (minimum, following):
+        plan = scurve_via(points, [duration], 1.0, 1.0, 1.0, velocities)
+        check_path(plan, points[:, None], np.array([duration]), *limits)
