@@ -56,6 +56,10 @@ def scurve_min_time(
     result has per-joint breakpoints ``(pieces + 1, joints)`` and cubic pieces: 7, or 9
     with braking first when the start state is beyond (or will overshoot) the limits.
     Raises ``ValueError`` when no plan can be found, naming the joint and its input.
+
+    Where Ruckig cannot synchronise even in rescaled units (a joint whose own time is a
+    tiny fraction of the common one), the duration is still the optimum, but a joint that
+    starts moving may reach its goal early and hold it (:mod:`traj_gen_ros.scurve_ruckig`).
     """
     move = Move(start.tolist(), goal.tolist(), start_velocity.tolist(),
                 start_acceleration.tolist(), [0.0] * start.size,
@@ -117,11 +121,13 @@ def fixed_duration(move: Move, caller: str, what: str) -> Trajectory:
                          f'the minimum duration is {round_up(fastest)} s')
     blocked = [joint for joint in range(len(move.start))
                if plan_move(move.joint(joint))[1] > move.duration * (1 + DURATION_TOLERANCE)]
-    names = ', '.join(str(joint) for joint in blocked) or 'every'
+    names = ('the joints together' if not blocked else
+             f'joint{"s" if len(blocked) > 1 else ""} '
+             + ', '.join(str(joint) for joint in blocked))
     raise ValueError(f'{caller}: {what} {move.duration:g} s is in a blocked duration interval '
-                     f'of joint {names} (from its start state it would stop short or '
-                     f'overshoot); the minimum duration is {round_up(fastest)} s and the '
-                     f'next one that works is {round_up(reached)} s')
+                     f'of {names} (from its start state it would stop short or overshoot); '
+                     f'the minimum duration is {round_up(fastest)} s and the next one that '
+                     f'works is {round_up(reached)} s')
 
 
 def peak_jerk(trajectory: Trajectory) -> np.ndarray:
