@@ -105,13 +105,17 @@ def _composed(move: Move) -> tuple[Trajectory, float] | None:
         hold = np.array([[move.goal[joint], 0.0, 0.0, 0.0]])
         if time > 0.0 and not (move.v0[joint] or move.a0[joint]):
             stretch = duration / time
-            times = np.minimum(times * stretch, duration)
-            coefficients = coefficients / stretch ** np.arange(4.0)
+            with np.errstate(all='ignore'):
+                times = np.minimum(times * stretch, duration)
+                coefficients = coefficients / stretch ** np.arange(4.0)
         else:
             times = np.append(times, duration)
             coefficients = np.concatenate([coefficients, hold])
         times[-1] = duration
         columns.append((times, coefficients, hold))
+    if not all(np.isfinite(times).all() and np.isfinite(coefficients).all()
+               for times, coefficients, _ in columns):
+        return None
     pieces = max(len(coefficients) for _, coefficients, _ in columns)
     breakpoints = np.full((pieces + 1, joints), duration)
     table = np.zeros((pieces, 4, joints))
@@ -217,7 +221,7 @@ def _scalings(move: Move, positions: bool):
     if not positions:
         yield time_scale, [1.0] * len(move.start)
         return
-    extents = [abs(goal - start) + abs(v0) * time_scale + abs(a0) * time_scale**2
+    extents = [abs(goal - start) + abs(v0) * time_scale + abs(a0) * time_scale * time_scale
                + abs(vf) * time_scale
                for start, goal, v0, a0, vf in zip(move.start, move.goal, move.v0, move.a0,
                                                   move.vf, strict=True)]
@@ -249,7 +253,9 @@ def _calculate(move: Move, time_scale: float,
 
     def scaled(values: Floats, power: int) -> Floats:
         """Convert rad/s**power to scaled units: times k**power, divided by s."""
-        factor = k**power
+        factor = 1.0
+        for _ in range(power):
+            factor *= k
         return [value * factor / scale for value, scale in zip(values, scales, strict=True)]
 
     try:
@@ -301,11 +307,15 @@ def _arrives(trajectory: Trajectory, move: Move) -> bool:
     ``s`` widens it by ``s``, so such a plan is kept only if it still arrives within
     ``1e-8`` plus ``1e-9`` of the positions' or the limit's magnitude.
     """
-    position, velocity, _ = trajectory.sample(trajectory.duration)
-    reach = np.maximum(np.maximum(np.abs(move.start), np.abs(move.goal)), 1.0)
-    return (validation.every(np.abs(position[0] - move.goal) <= 1e-8 + 1e-9 * reach)
-            and validation.every(np.abs(velocity[0] - move.vf)
-                                 <= 1e-8 + 1e-9 * np.asarray(move.limits[0])))
+    c0, c1, c2, c3 = trajectory.coefficients[-1]  # each joint's last piece, at its end
+    with np.errstate(all='ignore'):
+        length = trajectory.breakpoints[-1] - trajectory.breakpoints[-2]
+        position = ((c3 * length + c2) * length + c1) * length + c0
+        velocity = (3.0 * c3 * length + 2.0 * c2) * length + c1
+        reach = np.maximum(np.maximum(np.abs(move.start), np.abs(move.goal)), 1.0)
+        return (validation.every(np.abs(position - move.goal) <= 1e-8 + 1e-9 * reach)
+                and validation.every(np.abs(velocity - move.vf)
+                                     <= 1e-8 + 1e-9 * np.asarray(move.limits[0])))
 
 
 def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Floats,
@@ -339,14 +349,18 @@ def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Fl
     if k == 1.0 and not any(shifts) and scales.count(1.0) == len(scales):
         table[:, 2] *= 0.5
         table[:, 3] *= 1.0 / 6.0
-    else:
-        scale = np.array(scales)
-        table[:, :4] *= scale / np.array([[1.0], [k], [2.0 * k * k], [6.0 * k**3]])
-        table[:, 0] += shifts
-        table[:, 4] *= k
-    breakpoints = np.empty((len(table) + 1, len(profiles)))
-    breakpoints[0] = 0.0
-    np.minimum(np.cumsum(table[:, 4], axis=0), duration, out=breakpoints[1:])
+        breakpoints = np.empty((len(table) + 1, len(profiles)))
+        breakpoints[0] = 0.0
+        np.minimum(np.cumsum(table[:, 4], axis=0), duration, out=breakpoints[1:])
+    else:  # scaled units: the products may overflow, then the plan is refused below
+        with np.errstate(all='ignore'):
+            divisors = np.array([[1.0], [k], [2.0 * k * k], [6.0 * k * k * k]])
+            table[:, :4] *= np.array(scales) / divisors
+            table[:, 0] += shifts
+            table[:, 4] *= k
+            breakpoints = np.empty((len(table) + 1, len(profiles)))
+            breakpoints[0] = 0.0
+            np.minimum(np.cumsum(table[:, 4], axis=0), duration, out=breakpoints[1:])
     breakpoints[-1] = duration
     coefficients = np.ascontiguousarray(table[:, :4])
     # Every piece that starts at 0 (the first, and any zero-length ones after it) starts

@@ -190,7 +190,14 @@ def _validated(points: ArrayLike, durations: ArrayLike, max_velocity: ArrayLike,
 def _via_velocities(path: np.ndarray, durations: np.ndarray,
                     spec: np.ndarray | None) -> np.ndarray:
     """Velocities at every point (rad/s): the given ones, or Craig's heuristic."""
-    return heuristic_velocities(path, durations) if spec is None else spec
+    return _heuristic(path, durations) if spec is None else spec
+
+
+def _heuristic(path: np.ndarray, durations: np.ndarray) -> np.ndarray:
+    """Craig's heuristic velocities; an overflowing slope gives ``inf`` (refused later)."""
+    with np.errstate(all='ignore'):
+        velocities = heuristic_velocities(path, durations)
+    return np.where(np.isnan(velocities), np.inf, velocities)
 
 
 def _check_velocities(via: np.ndarray, max_velocity: np.ndarray,
@@ -216,7 +223,7 @@ def _segment(path: np.ndarray, via: np.ndarray, durations: np.ndarray, limits: t
 def _segment_feasible(path: np.ndarray, durations: np.ndarray, limits: tuple,
                       segment: int) -> bool:
     """Tell whether ``segment`` meets its duration with the heuristic velocities."""
-    via = heuristic_velocities(path, durations)
+    via = _heuristic(path, durations)
     ends = np.abs(via[segment:segment + 2]) <= limits[0]
     if not validation.every(ends):
         return False
@@ -229,7 +236,7 @@ def _segment_feasible(path: np.ndarray, durations: np.ndarray, limits: tuple,
 
 def _feasible(path: np.ndarray, durations: np.ndarray, limits: tuple) -> bool:
     """Tell whether every segment meets its duration with the heuristic velocities."""
-    via = heuristic_velocities(path, durations)
+    via = _heuristic(path, durations)
     if not validation.every(np.abs(via) <= limits[0]):
         return False
     return all(_segment_feasible(path, durations, limits, segment)
@@ -247,7 +254,7 @@ def _smallest_heuristic(path: np.ndarray, durations: np.ndarray, limits: tuple,
     """
     trial = durations.copy()
     for _ in range(_FIXED_POINT_STEPS):
-        via = heuristic_velocities(path, trial)
+        via = _heuristic(path, trial)
         if not validation.every(np.abs(via[segment:segment + 2]) <= limits[0]):
             break
         try:
