@@ -187,3 +187,20 @@ def test_blocked_segment_duration_is_named_with_the_next_that_works():
     for duration in (minimum, following):
         plan = scurve_via(points, [duration], 1.0, 1.0, 1.0, velocities)
         check_path(plan, points[:, None], np.array([duration]), *limits)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(-200.0, 200.0), min_size=6, max_size=6), st.booleans())
+def test_extreme_via_requests_give_a_finite_plan_or_a_value_error(exponents, timed):
+    scale, duration, vmax, amax, jmax, spread = (10.0**e for e in exponents)
+    points = np.array([[0.0, scale], [scale, -scale], [scale * spread, 0.0]])
+    try:
+        durations = ([duration] * 2 if timed else
+                     scurve_via_durations(points, vmax, amax, jmax))
+        plan = scurve_via(points, durations, vmax, amax, jmax)
+    except ValueError as error:
+        # Named: a segment, or (scale * spread overflowing) a point that is not finite.
+        assert 'scurve_via' in str(error) or 'points must be finite' in str(error), error
+        return
+    assert np.isfinite(plan.coefficients).all() and np.isfinite(plan.breakpoints).all()
+    assert np.all(peak_jerk(plan) <= jmax * (1 + TOL))

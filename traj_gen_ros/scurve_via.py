@@ -68,7 +68,10 @@ def scurve_via(
                 move, 'scurve_via', f'segment {segment} (points {segment} to {segment + 1}): '
                 'duration'))
         except ValueError as error:
-            if spec is not None or 'Ruckig' in str(error):
+            if 'no jerk-limited plan' in str(error):
+                raise ValueError(f'scurve_via: segment {segment} (points {segment} to '
+                                 f'{segment + 1}): {error}') from None
+            if spec is not None:
                 raise
             smallest = _smallest_heuristic(path, durations, limits, segment)
             raise ValueError(
@@ -131,7 +134,7 @@ def scurve_via_durations(
         via = spec
         _check_velocities(via, limits[0], spec)
         ones = np.ones(segments)
-        times = np.array([minimum_duration(_segment(path, via, ones, limits, segment))
+        times = np.array([_shortest(path, via, ones, limits, segment)
                           for segment in range(segments)])
         if not times.any():
             raise ValueError('scurve_via_durations: the path never moves: every point equals '
@@ -139,7 +142,7 @@ def scurve_via_durations(
         return np.maximum(times, 1e-9 * times.max())
     rest = np.zeros_like(path)
     ones = np.ones(segments)
-    base = np.array([minimum_duration(_segment(path, rest, ones, limits, segment))
+    base = np.array([_shortest(path, rest, ones, limits, segment)
                      for segment in range(segments)])
     if not base.any():
         raise ValueError('scurve_via_durations: every via point equals the start: there is '
@@ -218,6 +221,16 @@ def _segment(path: np.ndarray, via: np.ndarray, durations: np.ndarray, limits: t
     return Move(path[segment].tolist(), path[segment + 1].tolist(), via[segment].tolist(),
                 [0.0] * path.shape[1], via[segment + 1].tolist(),
                 tuple(limit.tolist() for limit in limits), float(durations[segment]))
+
+
+def _shortest(path: np.ndarray, via: np.ndarray, durations: np.ndarray, limits: tuple,
+              segment: int) -> float:
+    """Return a segment's minimum time (s); a failure names the segment."""
+    try:
+        return minimum_duration(_segment(path, via, durations, limits, segment))
+    except ValueError as error:
+        raise ValueError(f'scurve_via_durations: segment {segment} (points {segment} to '
+                         f'{segment + 1}): {error}') from None
 
 
 def _segment_feasible(path: np.ndarray, durations: np.ndarray, limits: tuple,
