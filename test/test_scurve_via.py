@@ -8,7 +8,7 @@ from hypothesis import given, settings
 import hypothesis.strategies as st
 import numpy as np
 import pytest
-from test_scurve import ruckig_duration
+from test_scurve import resolution, ruckig_duration
 from traj_gen_ros.polynomial import heuristic_velocities
 from traj_gen_ros.scurve import peak_jerk
 from traj_gen_ros.scurve_via import scurve_via, scurve_via_durations
@@ -34,19 +34,22 @@ def check_path(plan, points, durations, vmax, amax, jmax):
     """Through every point at its time, within the limits, continuous to Ruckig's precision."""
     times = np.concatenate([[0.0], np.cumsum(durations)])
     assert plan.duration == pytest.approx(times[-1], rel=1e-15)
-    assert plan.piece_count == 7 * len(durations)
+    assert plan.piece_count >= 7 * len(durations)  # more where a fallback composed one
     position, velocity, acceleration = plan.sample(times)
     reach = max(1.0, float(np.max(np.abs(points))))
+    acceleration_slack, velocity_slack = resolution(plan, jmax, amax)  # see test_scurve
     assert np.all(np.abs(position[:-1] - points[:-1]) <= TOL * reach)
     assert np.all(np.abs(position[-1] - points[-1]) <= RUCKIG_PRECISION[0] + TOL * reach)
-    assert np.all(np.abs(acceleration) <= RUCKIG_PRECISION[2] + TOL * amax)
+    assert np.all(np.abs(acceleration) <= RUCKIG_PRECISION[2] + TOL * amax + acceleration_slack)
     peak_velocity, peak_acceleration = helpers.reference_peaks(plan)
-    assert np.all(peak_velocity <= vmax * (1 + TOL)), (peak_velocity, vmax)
-    assert np.all(peak_acceleration <= amax * (1 + TOL)), (peak_acceleration, amax)
+    assert np.all(peak_velocity <= vmax * (1 + TOL) + velocity_slack), (peak_velocity, vmax)
+    assert np.all(peak_acceleration <= amax * (1 + TOL) + acceleration_slack), (
+        peak_acceleration, amax)
     assert np.all(peak_jerk(plan) <= jmax * (1 + TOL))
     jumps, _ = helpers.boundary_jumps(plan)
     scale = np.stack([np.full_like(vmax, reach), vmax, amax])[:, None, :]
-    assert np.all(np.abs(jumps) <= RUCKIG_PRECISION[:, None, None] + TOL * scale), jumps
+    slack = np.stack([np.zeros_like(vmax), velocity_slack, acceleration_slack])[:, None, :]
+    assert np.all(np.abs(jumps) <= RUCKIG_PRECISION[:, None, None] + TOL * scale + slack), jumps
 
 
 @FAST
@@ -93,7 +96,7 @@ def test_given_velocities_give_ruckigs_exact_segment_times(path, data):
         if expected is None:  # Ruckig alone refuses (-101): a long segment
             assert duration > 7.6e3
         elif not math.isnan(expected):
-            assert duration == pytest.approx(max(expected, 1e-9 * durations.max()), rel=TOL)
+            assert duration == pytest.approx(expected or 1e-9 * durations.max(), rel=TOL)
     plan = scurve_via(points, durations, vmax, amax, jmax, velocities)
     check_path(plan, points, durations, vmax, amax, jmax)
     _, velocity, _ = plan.sample(np.concatenate([[0.0], np.cumsum(durations)]))

@@ -22,12 +22,13 @@ import math
 
 import numpy as np
 import ruckig
-from traj_gen_ros import validation
+from traj_gen_ros import scurve_fallback, validation
 from traj_gen_ros.trajectory import Trajectory
 
 PHASES = 7  # jerk phases of one S-curve; braking adds two before them
 DURATION_TOLERANCE = 1e-13  # relative: a plan this close to the asked duration meets it
 _GOOD = (ruckig.Result.Working, ruckig.Result.Finished)
+_LIMIT_TOLERANCE = 1e-10  # relative: a Ruckig phase beyond a limit by more is refused
 _SMALLEST_RATIO = 2.0**-20  # lowered limits stay above this fraction (cubed for jerk)
 LIMIT_NAMES = ('max_velocity', 'max_acceleration', 'max_jerk')
 
@@ -73,62 +74,10 @@ def plan_move(move: Move) -> tuple[Trajectory, float]:
             reason = reason or solved
         elif needed is None or solved[1] <= needed * (1.0 + DURATION_TOLERANCE):
             return solved
-    composed = _composed(move)
-    if composed is not None:
-        return composed
+    fallback = scurve_fallback.rest_to_rest(move) or scurve_fallback.composed(move, plan_move)
+    if fallback is not None:
+        return fallback
     raise ValueError(_failure_message(move, reason))
-
-
-def _composed(move: Move) -> tuple[Trajectory, float] | None:
-    """
-    Plan each joint alone and bring them to the common duration, when Ruckig cannot.
-
-    ``T`` is the requested duration, or the slowest joint's own minimum time (so the plan
-    stays time-optimal). A joint starting at rest runs its own optimal profile slowed by
-    ``σ = T/t`` (pieces ``σ`` times longer, coefficients ``c_n/σ^n``: within the limits,
-    arriving at ``T``); a moving one runs its own optimum, then holds the goal until
-    ``T``. Only for targets at rest; returns ``None`` when it does not apply.
-    """
-    joints = len(move.start)
-    if any(move.vf) or (move.duration is None and joints == 1):
-        return None
-    try:
-        own = [plan_move(Move(*_fields(move.joint(joint)), None)) for joint in range(joints)]
-    except ValueError:
-        return None
-    duration = move.duration or max(time for _, time in own)
-    if max(time for _, time in own) > duration * (1.0 + DURATION_TOLERANCE):
-        return None
-    columns = []
-    for joint, (plan, time) in enumerate(own):
-        times, coefficients = plan.breakpoints[:, 0], plan.coefficients[:, :, 0]
-        hold = np.array([[move.goal[joint], 0.0, 0.0, 0.0]])
-        if time > 0.0 and not (move.v0[joint] or move.a0[joint]):
-            stretch = duration / time
-            with np.errstate(all='ignore'):
-                times = np.minimum(times * stretch, duration)
-                coefficients = coefficients / stretch ** np.arange(4.0)
-        else:
-            times = np.append(times, duration)
-            coefficients = np.concatenate([coefficients, hold])
-        times[-1] = duration
-        columns.append((times, coefficients, hold))
-    if not all(np.isfinite(times).all() and np.isfinite(coefficients).all()
-               for times, coefficients, _ in columns):
-        return None
-    pieces = max(len(coefficients) for _, coefficients, _ in columns)
-    breakpoints = np.full((pieces + 1, joints), duration)
-    table = np.zeros((pieces, 4, joints))
-    for joint, (times, coefficients, hold) in enumerate(columns):
-        breakpoints[:len(times), joint] = times
-        table[:, :, joint] = hold  # zero-length padding at the end holds the goal
-        table[:len(coefficients), :, joint] = coefficients
-    return Trajectory(breakpoints, table), duration
-
-
-def _fields(move: Move) -> tuple:
-    """Return a move's boundary states and limits, the leading ``Move`` arguments."""
-    return move.start, move.goal, move.v0, move.a0, move.vf, move.limits
 
 
 def _attempts(move: Move):
@@ -157,10 +106,11 @@ def _stretched(move: Move):
     Ruckig fails for a joint whose own minimum time ``t`` is far below the common
     duration ``T`` (its jerk phases become vanishingly short in the synchronisation). Such
     a joint may run under lower limits ``(ρ v, ρ² a, ρ³ j)``, ``ρ = min(1, 2^m t/T)`` (at
-    least 2^-20), never below its boundary velocities and start acceleration: any plan then is
-    within the original limits. For a joint at rest at both ends, ``m = 0`` is its own
-    optimal profile slowed to exactly ``T``, so the duration stays optimal. Yields
-    ``(move, T)``; a plan counts only if it keeps ``T``.
+    least 2^-20), never below its boundary velocities and start acceleration, and only if
+    its start needs no braking under them: any plan then is within the original limits.
+    For a joint at rest at both ends, ``m = 0`` is its own optimal profile slowed to
+    exactly ``T``, so the duration stays optimal. Yields ``(move, T)``; a plan counts only
+    if it keeps ``T``.
     """
     if move.duration is None and len(move.start) == 1:
         return  # nothing to stretch (and this is what minimum_duration below calls)
@@ -174,8 +124,13 @@ def _stretched(move: Move):
         for joint, time in enumerate(own):
             ratio = min(1.0, max(2.0**doubling * time / duration, _SMALLEST_RATIO))
             floors = (max(abs(move.v0[joint]), abs(move.vf[joint])), abs(move.a0[joint]), 0.0)
-            for power, (limit, floor) in enumerate(zip(limits, floors, strict=True), start=1):
-                limit[joint] = min(limit[joint], max(limit[joint] * ratio**power, floor))
+            pairs = enumerate(zip(limits, floors, strict=True), start=1)
+            lowered = [min(limit[joint], max(limit[joint] * ratio**power, floor))
+                       for power, (limit, floor) in pairs]
+            v0, a0 = move.v0[joint], move.a0[joint]
+            if abs(v0 + a0 * abs(a0) / (2.0 * lowered[2])) <= lowered[0]:  # no braking
+                for limit, value in zip(limits, lowered, strict=True):
+                    limit[joint] = value
         yield Move(move.start, move.goal, move.v0, move.a0, move.vf, limits,
                    move.duration), duration
 
@@ -290,10 +245,14 @@ def _calculate(move: Move, time_scale: float,
     if not math.isfinite(duration):
         return 'Ruckig gave a non-finite duration'
     if move.duration is not None and duration <= move.duration * (1 + DURATION_TOLERANCE):
-        duration = move.duration  # met: the last breakpoint is exactly the duration asked
-    built = _build(solution.profiles[0], duration, k, scales, shifts, move)
-    if built is None:
-        return 'the plan overflows in these units'
+        # Met. A plan a rounding longer is compressed to the duration asked (time scale
+        # k T/D: derivatives grow by (D/T)^n, ~1e-13), so that no piece is cut short.
+        k *= move.duration / duration
+        duration = move.duration
+    limits = (parameters.max_velocity, parameters.max_acceleration, parameters.max_jerk)
+    built = _build(solution.profiles[0], duration, k, scales, shifts, move, limits)
+    if isinstance(built, str):
+        return built
     if position_scales is not None and max(scales) > 1.0 and not _arrives(built, move):
         return 'Ruckig is not precise enough in these units'
     return built, duration
@@ -319,13 +278,15 @@ def _arrives(trajectory: Trajectory, move: Move) -> bool:
 
 
 def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Floats,
-           move: Move) -> Trajectory | None:
+           move: Move, limits: tuple[Floats, Floats, Floats]) -> Trajectory | str:
     """
     Rebuild each joint's phases as cubic pieces ``[p, v, a/2, j/6]`` in the caller's units.
 
     Braking phases (``profile.brake``) come first when any joint brakes; a joint that does
     not brake gets two zero-length pieces there. Piece ends are the running sums of the
-    phase durations, clipped to ``duration``. Returns ``None`` if anything is not finite.
+    phase durations, clipped to ``duration``. Returns why not if a phase after braking
+    exceeds ``limits`` (Ruckig's units) by more than rounding (Ruckig's tolerances are
+    absolute, ~1e-12: far more than a tiny limit), or if anything is not finite.
     """
     braking = any(profile.brake.duration > 0.0 for profile in profiles)
     rows = []
@@ -346,6 +307,8 @@ def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Fl
             rows.append((positions[:PHASES], velocities[:PHASES], accelerations[:PHASES],
                          profile.j, profile.t))
     table = np.array(rows).transpose(2, 1, 0)  # (pieces, p v a j t, joints)
+    if not _within(table[2 * braking:], limits):
+        return 'Ruckig exceeds a limit by more than rounding in these units'
     if k == 1.0 and not any(shifts) and scales.count(1.0) == len(scales):
         table[:, 2] *= 0.5
         table[:, 3] *= 1.0 / 6.0
@@ -372,5 +335,27 @@ def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Fl
         coefficients = np.where(initial, coefficients[:1], coefficients)
     if not (validation.every(np.isfinite(coefficients))
             and validation.every(np.isfinite(breakpoints))):
-        return None
+        return 'the plan overflows in these units'
     return Trajectory(breakpoints, coefficients)
+
+
+def _within(phases: np.ndarray, limits: tuple[Floats, Floats, Floats]) -> bool:
+    """
+    Tell whether phases ``(count, p v a j t, joints)`` keep the limits to 1e-9 (relative).
+
+    Acceleration peaks at phase ends, velocity there or where a jerk phase's acceleration
+    crosses zero. A first phase that starts beyond a limit (after braking from a start
+    beyond it) may stay up to that level; jerk never exceeds its limit.
+    """
+    with np.errstate(all='ignore'):
+        bound = 1.0 + _LIMIT_TOLERANCE
+        velocity, acceleration, jerk = phases[:, 1], phases[:, 2], phases[:, 3]
+        crossing = (acceleration[:-1] * acceleration[1:] < 0.0) & (jerk[:-1] != 0.0)
+        peak = np.where(crossing, velocity[:-1] - acceleration[:-1] ** 2 / (2.0 * jerk[:-1]),
+                        0.0)
+        max_velocity = np.maximum(limits[0], np.abs(velocity[0])) * bound
+        max_acceleration = np.maximum(limits[1], np.abs(acceleration[0])) * bound
+        return (validation.every(np.abs(jerk) <= np.multiply(limits[2], bound))
+                and validation.every(np.abs(acceleration) <= max_acceleration)
+                and validation.every(np.abs(velocity) <= max_velocity)
+                and validation.every(np.abs(peak) <= max_velocity))

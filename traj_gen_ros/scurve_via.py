@@ -14,6 +14,8 @@ Units: rad (or m), rad/s, rad/s², rad/s³, s.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from traj_gen_ros import validation
 from traj_gen_ros.polynomial import heuristic_velocities
@@ -94,7 +96,8 @@ def _check_heuristic(path: np.ndarray, durations: np.ndarray, limits: tuple,
     if not np.count_nonzero(over):
         return
     point, joint = (int(index) for index in np.argwhere(over)[0])
-    slopes = np.abs(np.diff(path[:, joint]) / durations)
+    with np.errstate(all='ignore'):
+        slopes = np.abs(np.diff(path[:, joint]) / durations)
     segment = max((s for s in (point - 1, point) if 0 <= s < len(durations)),
                   key=lambda s: slopes[s])
     smallest = _smallest_heuristic(path, durations, limits, segment)
@@ -139,7 +142,8 @@ def scurve_via_durations(
         if not times.any():
             raise ValueError('scurve_via_durations: the path never moves: every point equals '
                              'the start and every velocity is 0')
-        return np.maximum(times, 1e-9 * times.max())
+        # A segment that stays at rest takes any time: a short one (durations are > 0).
+        return np.where(times > 0.0, times, 1e-9 * times.max())
     rest = np.zeros_like(path)
     ones = np.ones(segments)
     base = np.array([_shortest(path, rest, ones, limits, segment)
@@ -158,6 +162,9 @@ def scurve_via_durations(
     else:
         for _ in range(_SCALE_STEPS):
             high *= 2.0
+            if not math.isfinite(float(base.max()) * high):  # Python floats: no warning
+                raise ValueError('scurve_via_durations: no finite scaling of the segment '
+                                 'durations keeps the heuristic path within the limits')
             if _feasible(path, base * high, limits):
                 break
             low = high
