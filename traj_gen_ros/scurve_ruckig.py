@@ -18,6 +18,7 @@ Units: rad (or m), rad/s, rad/s², rad/s³, s.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 import math
 
 import numpy as np
@@ -81,7 +82,7 @@ def plan_move(move: Move) -> tuple[Trajectory, float]:
     raise ValueError(_failure_message(move, reason))
 
 
-def _attempts(move: Move):
+def _attempts(move: Move) -> Iterator[tuple[Move, float, Floats | None, float | None]]:
     """
     Yield ``(move, time scale, position scales, duration it must keep or None)`` to try.
 
@@ -100,7 +101,7 @@ def _attempts(move: Move):
             yield variant, time_scale, position_scales, duration
 
 
-def _stretched(move: Move):
+def _stretched(move: Move) -> Iterator[tuple[Move, float]]:
     """
     Yield ``move`` with lowered limits for joints far faster than the common duration.
 
@@ -156,7 +157,7 @@ def _failure_message(move: Move, reason: str) -> str:
             'extreme for each other')
 
 
-def _scalings(move: Move, positions: bool):
+def _scalings(move: Move, positions: bool) -> Iterator[tuple[float, Floats | None]]:
     """
     Yield ``(time scale k, per-joint position scales s)`` for Ruckig to try.
 
