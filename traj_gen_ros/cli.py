@@ -37,7 +37,7 @@ EXIT_INTERNAL = 4
 PROG = 'traj-gen'
 # What requirements.txt pins; named in the error when matplotlib is missing.
 MATPLOTLIB_REQUIREMENT = 'matplotlib==3.11.2'
-PROFILES = ('cubic', 'quintic', 'lspb', 'cubic-via', 'quintic-via', 'min-time')
+PROFILES = ('cubic', 'quintic', 'lspb', 'cubic-via', 'quintic-via', 'min-time', 'scurve')
 _UNSIGNED = r'(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?'
 # Lets argparse take '-1,2' (a point of two joints) as a value, not as an option.
 _NUMBER_LIST = re.compile(rf'^-{_UNSIGNED}(,[-+]?{_UNSIGNED})*$')
@@ -49,6 +49,7 @@ examples:
   traj-gen solve quintic --points 0,0 1,-0.5 --duration 2 --json
   traj-gen solve cubic-via --points 0 1 0.5 --durations 1 1 --velocities continuous
   traj-gen solve min-time --points 0,0 1,2 --max-velocity 1 --max-acceleration 2 --shape lspb
+  traj-gen solve scurve --points 0,0 1,2 --max-velocity 1 --max-acceleration 2 --max-jerk 10
 """
 
 PLOT_EXAMPLES = """\
@@ -56,6 +57,8 @@ examples:
   traj-gen plot cubic --points 15 75 --duration 3 --degrees -o cubic.png
   traj-gen plot lspb --points 10 35 25 10 --durations 2 1 3 --acceleration 50 --degrees \\
       -o lspb_via.png --size 1000x900
+  traj-gen plot scurve --points 0 1 0.5 --max-velocity 1 --max-acceleration 2 \
+      --max-jerk 10 -o scurve.png
   traj-gen plot --topic /trajectory_generator/trajectory -o node.png --timeout 10
 """
 
@@ -121,7 +124,8 @@ def add_plan_arguments(parser: argparse.ArgumentParser, optional_profile: bool) 
         'profile', choices=PROFILES, nargs='?' if optional_profile else None,
         help='cubic | quintic (one segment: 2 points, 1 duration), lspb (2 points and 1 '
              'duration, or via points), cubic-via | quintic-via (via points), min-time '
-             '(duration from --max-velocity/--max-acceleration)')
+             '(duration from --max-velocity/--max-acceleration), scurve (jerk-limited, '
+             'seven phases, with --max-jerk too: minimum time unless --durations)')
     parser.add_argument(
         '--points', nargs='+', type=number_list, metavar='P',
         help='positions, one value per point: q0 [q1 …] qf; joints of a point separated by '
@@ -148,6 +152,8 @@ def add_plan_arguments(parser: argparse.ArgumentParser, optional_profile: bool) 
                         help='min-time: velocity limit (one, or one per joint)')
     parser.add_argument('--max-acceleration', type=number_list, metavar='A',
                         help='min-time: acceleration limit (one, or one per joint)')
+    parser.add_argument('--max-jerk', type=number_list, metavar='J',
+                        help='scurve: jerk limit (one, or one per joint)')
     parser.add_argument('--shape', choices=('lspb', 'cubic', 'quintic'), default='lspb',
                         help='min-time: the profile to time (default lspb)')
     parser.add_argument('--degrees', action='store_true',
@@ -172,10 +178,11 @@ def build_parser() -> argparse.ArgumentParser:
     add_plan_arguments(solve, optional_profile=False)
 
     plot = commands.add_parser(
-        'plot', help='plot position, velocity and acceleration to a PNG',
+        'plot', help='plot position, velocity and acceleration (and jerk for scurve) to a PNG',
         description='Plan like "solve" (or record the node\'s ~/trajectory with --topic) and '
                     'write a PNG of three stacked panels: position, velocity and '
-                    'acceleration against time; points marked, LSPB blends shaded.',
+                    'acceleration against time (a fourth, jerk, for scurve); points '
+                    'marked, LSPB blends shaded.',
         epilog=PLOT_EXAMPLES)
     add_plan_arguments(plot, optional_profile=True)
     plot.add_argument('-o', '--output', required=True, metavar='FILE.png',
@@ -319,6 +326,8 @@ def make_plan(args: argparse.Namespace) -> Plan:
                 trajectory = profiles.lspb_via(path, segment_durations, acceleration,
                                                v0=joint_values('v0'))
             times = np.concatenate([[0.0], np.cumsum(segment_durations)])
+        elif profile == 'scurve':
+            trajectory, times = _scurve(args, path, joint_values)
         else:
             trajectory, times = _min_time(args, path, joint_values)
     except ValueError as error:
@@ -326,6 +335,47 @@ def make_plan(args: argparse.Namespace) -> Plan:
     if profile == 'min-time':
         profile = f'min-time {args.shape}'
     return Plan(trajectory, profile, points, times, unit)
+
+
+def _scurve(args: argparse.Namespace, path: np.ndarray,
+            joint_values: object) -> tuple[object, np.ndarray]:
+    """
+    Plan the jerk-limited S-curve: minimum time, or the given ``--durations``.
+
+    Two points: from ``--v0``/``--a0`` to rest (``scurve`` or ``scurve_min_time``); more:
+    through the via points with heuristic velocities (``scurve_via``, timed by
+    ``scurve_via_durations`` when no durations are given).
+    """
+    from traj_gen_ros import scurve, scurve_via, validation
+
+    limits = [joint_values(name, None) for name in ('max-velocity', 'max-acceleration',
+                                                    'max-jerk')]
+    if any(limit is None for limit in limits):
+        raise UsageError('scurve needs --max-velocity, --max-acceleration and --max-jerk')
+    if args.velocities != 'heuristic':
+        raise UsageError('scurve takes --velocities heuristic only (zero acceleration at '
+                         'every via point)')
+    if len(path) > 2 and (args.v0 is not None or args.a0 is not None):
+        raise UsageError('scurve through via points starts at rest: drop --v0/--a0')
+    if len(path) == 2 and args.durations is None:
+        rows = validation.per_joint_rows(v0=joint_values('v0'), a0=joint_values('a0'))
+        limit_rows = validation.per_joint_rows(like=path[0], max_velocity=limits[0],
+                                               max_acceleration=limits[1], max_jerk=limits[2])
+        validation.require_positive(limit_rows, ('max_velocity', 'max_acceleration',
+                                                 'max_jerk'))
+        trajectory = scurve.scurve_min_time(path[0], path[1], rows[0], rows[1], *limit_rows)
+        return trajectory, np.array([0.0, trajectory.duration])
+    if args.durations is not None and len(args.durations) != len(path) - 1:
+        raise UsageError(f'{len(path)} points need {len(path) - 1} duration'
+                         f'{"s" if len(path) > 2 else ""}, got {len(args.durations)}')
+    if len(path) == 2:
+        trajectory = scurve.scurve(path[0], path[1], float(args.durations[0]), *limits,
+                                   v0=joint_values('v0'), a0=joint_values('a0'))
+        return trajectory, np.array([0.0, trajectory.duration])
+    durations = (np.array(args.durations, dtype=float) if args.durations is not None else
+                 scurve_via.scurve_via_durations(path, *limits))
+    trajectory = scurve_via.scurve_via(path, durations, *limits)
+    return trajectory, np.concatenate([[0.0], np.cumsum(durations)])
 
 
 def _min_time(args: argparse.Namespace, path: np.ndarray,
@@ -372,7 +422,9 @@ def describe(plan: Plan) -> dict:
         'points': _rows(plan.points),
         'point_times': _rows(plan.point_times),
     }
-    if hasattr(trajectory, 'blend_times'):
+    if plan.profile == 'scurve':
+        result.update(kind='scurve', **_phase_table(trajectory, len(plan.points) - 1))
+    elif hasattr(trajectory, 'blend_times'):
         # Craig's LSPB table, indexed [joint][point] and [joint][segment].
         blend_accelerations = 2.0 * np.abs(trajectory.coefficients[0::2, 2]).max(axis=0)
         result.update(
@@ -393,6 +445,40 @@ def describe(plan: Plan) -> dict:
     return result
 
 
+def _phase_table(trajectory: object, segments: int) -> dict:
+    """
+    Per joint, each S-curve phase: name, start, duration, jerk, and what it reaches.
+
+    ``acceleration`` and ``velocity`` are the values at the phase's end. Phases are
+    named ``1`` … ``7`` (``brake 1``, ``brake 2`` first when the start must brake), or
+    ``segment.phase`` through via points; zero-length phases are listed too.
+    """
+    from traj_gen_ros.scurve import peak_jerk
+
+    breakpoints = np.asarray(trajectory.breakpoints)
+    coefficients = trajectory.coefficients
+    pieces = trajectory.piece_count
+    if segments > 1 and pieces == 7 * segments:
+        names = [f'{segment + 1}.{phase + 1}' for segment in range(segments)
+                 for phase in range(7)]
+    elif pieces == 9:
+        names = ['brake 1', 'brake 2'] + [str(phase + 1) for phase in range(7)]
+    else:
+        names = [str(piece + 1) for piece in range(pieces)]
+    lengths = np.diff(breakpoints, axis=0)
+    jerk = 6.0 * coefficients[:, 3]
+    acceleration = 2.0 * coefficients[:, 2] + jerk * lengths
+    velocity = (coefficients[:, 1] + 2.0 * coefficients[:, 2] * lengths
+                + 3.0 * coefficients[:, 3] * lengths**2)
+    phases = [[{'phase': names[piece], 'start': round(float(breakpoints[piece, joint]), 12),
+                'duration': round(float(lengths[piece, joint]), 12),
+                'jerk': round(float(jerk[piece, joint]), 12),
+                'acceleration': round(float(acceleration[piece, joint]), 12),
+                'velocity': round(float(velocity[piece, joint]), 12)}
+               for piece in range(pieces)] for joint in range(trajectory.joint_count)]
+    return {'peak_jerk': _rows(peak_jerk(trajectory)), 'phases': phases}
+
+
 def _pair_label(index: int, count: int) -> str:
     separator = ',' if count >= 10 else ''
     return f'{index + 1}{separator}{index + 2}'
@@ -405,6 +491,17 @@ def format_text(result: dict) -> str:
     lines = [f"{result['profile']}: {joints} joint{'s' if joints > 1 else ''}, "
              f"{len(result['points'])} points, duration {result['duration']:.4f} s; "
              f'positions in {unit}, times in s']
+    if result['kind'] == 'scurve':
+        for joint, rows in enumerate(result['phases']):
+            lines.append(f"joint {joint}: peak |jerk| {result['peak_jerk'][joint]:.4f} "
+                         f'{unit}/s³; acceleration and velocity at the end of each phase')
+            lines.append(f"  {'phase':<8}{'start':>10}{'duration':>10}{'jerk':>12}"
+                         f"{'acceleration':>14}{'velocity':>12}")
+            for row in rows:
+                lines.append(f"  {row['phase']:<8}{row['start']:10.4f}{row['duration']:10.4f}"
+                             f"{row['jerk']:12.4f}{row['acceleration']:14.4f}"
+                             f"{row['velocity']:12.4f}")
+        return '\n'.join(lines)
     if result['kind'] == 'lspb':
         points = len(result['points'])
         for joint in range(joints):
@@ -479,7 +576,7 @@ def run_plot(args: argparse.Namespace) -> int:
     info = plotting.plot_trajectory(
         plan.trajectory, args.output, unit=plan.unit,
         marks=(plan.point_times, plan.points), size=args.size,
-        title=_plot_title(plan))
+        title=_plot_title(plan), jerk=plan.profile == 'scurve')
     report_plot(info, args.json)
     return EXIT_OK
 

@@ -3,7 +3,8 @@ PNG plots of joint trajectories: position, velocity and acceleration against tim
 
 matplotlib with the Agg backend (no display needed); no ROS. One figure of three stacked
 panels sharing the time axis, one line per joint; given points are marked and, for LSPB,
-each joint's parabolic blends are shaded in its colour.
+each joint's parabolic blends are shaded in its colour. Jerk-limited (S-curve) plans get
+a fourth panel, jerk.
 """
 
 from __future__ import annotations
@@ -37,6 +38,28 @@ def sample_trajectory(trajectory: object, samples: int = _DENSE_SAMPLES
     return times, positions, velocities, accelerations
 
 
+def sample_jerk(trajectory: object, times: np.ndarray) -> np.ndarray:
+    """
+    Return the jerk (third derivative) of a core ``Trajectory`` at ``times``: ``(n, joints)``.
+
+    Each joint's piece is looked up in its own breakpoints (zero-length pieces skipped)
+    and its ascending coefficients differentiated three times at the local time.
+    """
+    times = np.clip(np.asarray(times, dtype=float), 0.0, trajectory.duration)
+    breakpoints = np.asarray(trajectory.breakpoints)
+    if breakpoints.ndim == 1:
+        breakpoints = np.repeat(breakpoints[:, None], trajectory.joint_count, axis=1)
+    coefficients = trajectory.coefficients
+    jerks = np.zeros((times.size, trajectory.joint_count))
+    for joint in range(trajectory.joint_count):
+        piece = np.searchsorted(breakpoints[1:-1, joint], times, side='right')
+        local = times - breakpoints[piece, joint]
+        for power in range(coefficients.shape[1] - 1, 2, -1):
+            factor = power * (power - 1) * (power - 2)
+            jerks[:, joint] += factor * coefficients[piece, power, joint] * local ** (power - 3)
+    return jerks
+
+
 def blend_intervals(trajectory: object) -> list[list[tuple[float, float]]]:
     """
     Return each joint's blend intervals ``[(start, end), …]`` of an LSPB trajectory.
@@ -54,7 +77,7 @@ def blend_intervals(trajectory: object) -> list[list[tuple[float, float]]]:
 def plot_trajectory(trajectory: object, output: str, *, unit: str = 'rad',
                     marks: tuple[np.ndarray, np.ndarray] | None = None,
                     size: tuple[int, int] = (900, 900), title: str = '',
-                    joint_names: Sequence[str] | None = None) -> dict:
+                    joint_names: Sequence[str] | None = None, jerk: bool = False) -> dict:
     """
     Write a PNG of a core ``Trajectory``: see :func:`plot_samples`.
 
@@ -65,12 +88,14 @@ def plot_trajectory(trajectory: object, output: str, *, unit: str = 'rad',
     :param size: image size in pixels, ``(width, height)``.
     :param title: figure title.
     :param joint_names: legend names, default ``joint 0``, ``joint 1``, ….
+    :param jerk: add a fourth panel, jerk (for S-curve plans).
     :return: what was written (see :func:`plot_samples`).
     """
     times, positions, velocities, accelerations = sample_trajectory(trajectory)
     return plot_samples(times, positions, velocities, accelerations, output, unit=unit,
                         marks=marks, blends=blend_intervals(trajectory), size=size,
-                        title=title, joint_names=joint_names)
+                        title=title, joint_names=joint_names,
+                        jerks=sample_jerk(trajectory, times) if jerk else None)
 
 
 def plot_samples(times: np.ndarray, positions: np.ndarray, velocities: np.ndarray,
@@ -78,7 +103,8 @@ def plot_samples(times: np.ndarray, positions: np.ndarray, velocities: np.ndarra
                  marks: tuple[np.ndarray, np.ndarray] | None = None,
                  blends: list[list[tuple[float, float]]] | None = None,
                  size: tuple[int, int] = (900, 900), title: str = '',
-                 joint_names: Sequence[str] | None = None) -> dict:
+                 joint_names: Sequence[str] | None = None,
+                 jerks: np.ndarray | None = None) -> dict:
     """
     Write three stacked panels (position, velocity, acceleration vs time) to a PNG.
 
@@ -91,18 +117,22 @@ def plot_samples(times: np.ndarray, positions: np.ndarray, velocities: np.ndarra
     :param size: image size in pixels, ``(width, height)``, at :data:`DPI`.
     :param title: figure title.
     :param joint_names: legend names, default ``joint 0``, ``joint 1``, ….
+    :param jerks: ``(n, joints)`` jerk samples: a fourth panel when given.
     :return: ``{'output', 'width', 'height', 'panels', 'joints'}``; ``panels`` lists the
         figure's axes by their y labels.
     """
     joints = positions.shape[1]
     names = list(joint_names) if joint_names else [f'joint {j}' for j in range(joints)]
     width, height = size
-    figure, axes = plt.subplots(3, 1, sharex=True, figsize=(width / DPI, height / DPI),
+    series = [positions, velocities, accelerations]
+    labels = [f'position [{unit}]', f'velocity [{unit}/s]', f'acceleration [{unit}/s²]']
+    if jerks is not None:
+        series.append(jerks)
+        labels.append(f'jerk [{unit}/s³]')
+    figure, axes = plt.subplots(len(series), 1, sharex=True, figsize=(width / DPI, height / DPI),
                                 dpi=DPI, layout='constrained')
     try:
         colors = plt.rcParams['axes.prop_cycle'].by_key()['color']
-        series = (positions, velocities, accelerations)
-        labels = (f'position [{unit}]', f'velocity [{unit}/s]', f'acceleration [{unit}/s²]')
         for panel, values, label in zip(axes, series, labels, strict=True):
             for joint in range(joints):
                 color = colors[joint % len(colors)]
