@@ -1,4 +1,4 @@
-"""Jerk-limited S-curve moves (traj_gen_ros.scurve) against Ruckig as the oracle."""
+"""Jerk-limited S-curve moves (traj_gen_ros.scurve_move) against Ruckig as the oracle."""
 
 import math
 import re
@@ -9,8 +9,14 @@ import hypothesis.strategies as st
 import numpy as np
 import pytest
 import ruckig
-from traj_gen_ros import scurve_fallback
-from traj_gen_ros.scurve import peak_jerk, scurve, scurve_min_time
+from traj_gen_ros import (
+    JerkLimitedTrajectory,
+    limit_violation,
+    min_time,
+    plan_path,
+    scurve_fallback,
+)
+from traj_gen_ros.scurve_move import scurve, scurve_min_time
 from traj_gen_ros.scurve_ruckig import Move
 
 FAST = settings(max_examples=80, deadline=None)
@@ -101,7 +107,7 @@ def check_plan(plan, q0, qf, v0, a0, vmax, amax, jmax):
     assert np.all(peak_velocity <= vmax * (1 + TOL) + velocity_slack), (peak_velocity, vmax)
     assert np.all(peak_acceleration <= amax * (1 + TOL) + acceleration_slack), (
         peak_acceleration, amax)
-    assert np.all(peak_jerk(plan) <= jmax * (1 + TOL)), (peak_jerk(plan), jmax)
+    assert np.all(plan.peak_jerk() <= jmax * (1 + TOL)), (plan.peak_jerk(), jmax)
     jumps, scales = helpers.boundary_jumps(plan)
     scale = np.stack([np.maximum(np.abs(qf - q0), 1.0), vmax, amax])[:, None, :]
     slack = np.stack([np.zeros_like(vmax), velocity_slack, acceleration_slack])[:, None, :]
@@ -188,7 +194,7 @@ def test_start_beyond_the_limits_brakes_first(v0, a0):
     expected, _ = ruckig_duration(q0, qf, v0s, a0s, *limits)
     assert plan.duration == pytest.approx(expected, rel=TOL, abs=0.0)
     assert plan.piece_count == 9  # two braking phases, then seven
-    assert np.all(peak_jerk(plan) <= 4.0 * (1 + TOL))
+    assert np.all(plan.peak_jerk() <= 4.0 * (1 + TOL))
     helpers.assert_continuous(plan, orders=3)
     position, velocity, acceleration = plan.sample([0.0, plan.duration])
     assert position[0].tolist() == [0.0, 0.0] and velocity[0].tolist() == [v0, 0.0]
@@ -272,7 +278,7 @@ def test_extreme_start_acceleration_ruckig_rejects_is_planned():
     assert np.isfinite(plan.coefficients).all() and plan.duration > 999.0
     position, velocity, acceleration = plan.sample([0.0, plan.duration])
     assert acceleration[0, 0] == 1e3 and position[1, 0] == pytest.approx(1.0, rel=1e-6)
-    assert np.all(peak_jerk(plan) <= 1.0 + TOL)
+    assert np.all(plan.peak_jerk() <= 1.0 + TOL)
 
 
 @settings(max_examples=60, deadline=None)
@@ -288,18 +294,19 @@ def test_extreme_inputs_give_a_finite_plan_or_a_value_error(exponents, fixed, jo
         assert 'scurve' in str(error)
         return
     assert np.isfinite(plan.coefficients).all() and np.isfinite(plan.breakpoints).all()
-    assert np.all(peak_jerk(plan) <= jmax * (1 + TOL))
+    assert np.all(plan.peak_jerk() <= jmax * (1 + TOL))
 
 
-def test_peak_jerk_is_the_largest_cubic_coefficient_times_six():
+def test_peaks_report_jerk_the_largest_cubic_coefficient_times_six():
     plan = scurve_min_time(np.zeros(2), np.array([1.0, 0.1]), np.zeros(2), np.zeros(2),
                            np.ones(2), np.ones(2), np.array([3.0, 2.0]))
     manual = [max(abs(6.0 * c) for c in plan.coefficients[:, 3, joint]) for joint in (0, 1)]
-    assert peak_jerk(plan).tolist() == manual
+    assert plan.peak_jerk().tolist() == pytest.approx(manual, rel=1e-15)
+    assert plan.peaks()[2].tolist() == pytest.approx(manual, rel=1e-15)
     assert manual == pytest.approx([3.0, 2.0], rel=1e-12)
     ramp = scurve_min_time(np.zeros(1), np.ones(1), np.zeros(1), np.zeros(1), np.ones(1),
                            np.ones(1), np.ones(1))
-    assert peak_jerk(ramp).tolist() == pytest.approx([1.0])
+    assert ramp.peak_jerk().tolist() == pytest.approx([1.0])
 
 
 @FAST
@@ -322,9 +329,37 @@ def test_target_ruckig_cannot_reach_is_planned_in_closed_form():
     limits = np.ones(2), np.ones(2), np.full(2, 10.0)
     plan = scurve_min_time(q0, qf, np.zeros(2), np.zeros(2), *limits)
     assert plan.duration == pytest.approx(1e13 - 1.0 + 1.0 + 0.1, rel=1e-12)  # D/v + v/a + a/j
-    assert np.all(peak_jerk(plan) <= 10.0 * (1 + TOL))
+    assert np.all(plan.peak_jerk() <= 10.0 * (1 + TOL))
     position, velocity, _ = plan.sample(plan.duration)
     assert position[0] == pytest.approx(qf, rel=1e-12, abs=1e-8)
     # Breakpoints near 1e13 s are 2e-3 s apart: velocity is exact to a_max times that.
     _, velocity_slack = resolution(plan, limits[2], limits[1])
     assert np.all(np.abs(velocity[0]) <= velocity_slack) and velocity_slack[0] < 1e-2
+
+
+def test_min_time_entry_point_plans_the_scurve_like_ruckig():
+    q0, qf = np.array([0.0, 1.0, -0.5]), np.array([2.0, -1.0, 0.5])
+    v0, a0 = np.array([0.4, -0.2, 0.0]), np.array([0.5, 0.0, -1.0])
+    limits = (np.array([1.0, 2.0, 1.5]), np.array([2.0, 3.0, 2.0]), np.array([10.0, 5.0, 8.0]))
+    plan = min_time(q0, qf, limits[0], limits[1], 'scurve', v0=v0, a0=a0, max_jerk=limits[2])
+    assert isinstance(plan, JerkLimitedTrajectory)
+    assert plan.duration == pytest.approx(ruckig_duration(q0, qf, v0, a0, *limits)[0], rel=1e-9)
+    velocity, acceleration, jerk = plan.peaks()
+    assert np.all(velocity <= limits[0] * (1 + TOL)) and np.all(jerk <= limits[2] * (1 + TOL))
+    with pytest.raises(ValueError, match='scurve needs max_jerk'):
+        min_time(q0, qf, limits[0], limits[1], 'scurve')
+
+
+def test_plan_path_scurve_from_a_moving_state_keeps_acceleration_continuous():
+    points = np.array([[0.0, 0.0], [1.0, 0.5], [2.0, 0.0]])
+    v0, a0 = np.array([0.3, -0.1]), np.array([0.4, 0.2])
+    plan = plan_path(points, None, 'scurve', max_velocity=1.0, max_acceleration=2.0,
+                     max_jerk=10.0, v0=v0, a0=a0)
+    position, velocity, acceleration = plan.sample([0.0])
+    np.testing.assert_array_equal(position[0], points[0])
+    np.testing.assert_allclose(velocity[0], v0, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(acceleration[0], a0, rtol=0, atol=1e-12)
+    end, end_velocity, _ = plan.sample([plan.duration])
+    np.testing.assert_allclose(end[0], points[-1], atol=1e-8)
+    np.testing.assert_allclose(end_velocity[0], 0.0, atol=1e-8)
+    assert limit_violation(plan, np.ones(2), 2 * np.ones(2), 10 * np.ones(2)) is None

@@ -1,4 +1,4 @@
-"""Jerk-limited paths through via points (traj_gen_ros.scurve_via), Ruckig as the oracle."""
+"""Jerk-limited paths through via points (traj_gen_ros.scurve_path), Ruckig as the oracle."""
 
 import math
 import re
@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 from test_scurve import resolution, ruckig_duration
 from traj_gen_ros.polynomial import heuristic_velocities
-from traj_gen_ros.scurve import peak_jerk
-from traj_gen_ros.scurve_via import scurve_via, scurve_via_durations
+from traj_gen_ros.scurve_path import scurve_via, scurve_via_durations
 
 FAST = settings(max_examples=40, deadline=None)
 TOL = 1e-9
@@ -45,7 +44,7 @@ def check_path(plan, points, durations, vmax, amax, jmax):
     assert np.all(peak_velocity <= vmax * (1 + TOL) + velocity_slack), (peak_velocity, vmax)
     assert np.all(peak_acceleration <= amax * (1 + TOL) + acceleration_slack), (
         peak_acceleration, amax)
-    assert np.all(peak_jerk(plan) <= jmax * (1 + TOL))
+    assert np.all(plan.peak_jerk() <= jmax * (1 + TOL))
     jumps, _ = helpers.boundary_jumps(plan)
     scale = np.stack([np.full_like(vmax, reach), vmax, amax])[:, None, :]
     slack = np.stack([np.zeros_like(vmax), velocity_slack, acceleration_slack])[:, None, :]
@@ -206,4 +205,4 @@ def test_extreme_via_requests_give_a_finite_plan_or_a_value_error(exponents, tim
         assert 'scurve_via' in str(error) or 'points must be finite' in str(error), error
         return
     assert np.isfinite(plan.coefficients).all() and np.isfinite(plan.breakpoints).all()
-    assert np.all(peak_jerk(plan) <= jmax * (1 + TOL))
+    assert np.all(plan.peak_jerk() <= jmax * (1 + TOL))

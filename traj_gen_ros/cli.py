@@ -342,11 +342,11 @@ def _scurve(args: argparse.Namespace, path: np.ndarray,
     """
     Plan the jerk-limited S-curve: minimum time, or the given ``--durations``.
 
-    Two points: from ``--v0``/``--a0`` to rest (``scurve`` or ``scurve_min_time``); more:
-    through the via points with heuristic velocities (``scurve_via``, timed by
-    ``scurve_via_durations`` when no durations are given).
+    Two points: from ``--v0``/``--a0`` to rest (``min_time(..., 'scurve')`` or ``scurve``);
+    more: through the via points with heuristic velocities (``plan_path``, timed from the
+    limits when no durations are given).
     """
-    from traj_gen_ros import scurve, scurve_via, validation
+    from traj_gen_ros import profiles
 
     limits = [joint_values(name, None) for name in ('max-velocity', 'max-acceleration',
                                                     'max-jerk')]
@@ -355,26 +355,24 @@ def _scurve(args: argparse.Namespace, path: np.ndarray,
     if args.velocities != 'heuristic':
         raise UsageError('scurve takes --velocities heuristic only (zero acceleration at '
                          'every via point)')
-    if len(path) > 2 and (args.v0 is not None or args.a0 is not None):
-        raise UsageError('scurve through via points starts at rest: drop --v0/--a0')
-    if len(path) == 2 and args.durations is None:
-        rows = validation.per_joint_rows(v0=joint_values('v0'), a0=joint_values('a0'))
-        limit_rows = validation.per_joint_rows(like=path[0], max_velocity=limits[0],
-                                               max_acceleration=limits[1], max_jerk=limits[2])
-        validation.require_positive(limit_rows, ('max_velocity', 'max_acceleration',
-                                                 'max_jerk'))
-        trajectory = scurve.scurve_min_time(path[0], path[1], rows[0], rows[1], *limit_rows)
-        return trajectory, np.array([0.0, trajectory.duration])
     if args.durations is not None and len(args.durations) != len(path) - 1:
         raise UsageError(f'{len(path)} points need {len(path) - 1} duration'
                          f'{"s" if len(path) > 2 else ""}, got {len(args.durations)}')
+    start = {'v0': joint_values('v0'), 'a0': joint_values('a0')}
+    if len(path) == 2 and args.durations is None:
+        trajectory = profiles.min_time(path[0], path[1], limits[0], limits[1], 'scurve',
+                                       max_jerk=limits[2], **start)
+    elif len(path) == 2:
+        trajectory = profiles.scurve(path[0], path[1], float(args.durations[0]), *limits,
+                                     **start)
+    else:
+        trajectory = profiles.plan_path(path, args.durations, 'scurve', max_velocity=limits[0],
+                                        max_acceleration=limits[1], max_jerk=limits[2],
+                                        **start)
     if len(path) == 2:
-        trajectory = scurve.scurve(path[0], path[1], float(args.durations[0]), *limits,
-                                   v0=joint_values('v0'), a0=joint_values('a0'))
         return trajectory, np.array([0.0, trajectory.duration])
-    durations = (np.array(args.durations, dtype=float) if args.durations is not None else
-                 scurve_via.scurve_via_durations(path, *limits))
-    trajectory = scurve_via.scurve_via(path, durations, *limits)
+    durations = np.array(args.durations, dtype=float) if args.durations is not None else \
+        profiles.via_durations(path, limits[0], limits[1], 'scurve', max_jerk=limits[2])
     return trajectory, np.concatenate([[0.0], np.cumsum(durations)])
 
 
@@ -453,8 +451,6 @@ def _phase_table(trajectory: object, segments: int) -> dict:
     named ``1`` … ``7`` (``brake 1``, ``brake 2`` first when the start must brake), or
     ``segment.phase`` through via points; zero-length phases are listed too.
     """
-    from traj_gen_ros.scurve import peak_jerk
-
     breakpoints = np.asarray(trajectory.breakpoints)
     coefficients = trajectory.coefficients
     pieces = trajectory.piece_count
@@ -476,7 +472,7 @@ def _phase_table(trajectory: object, segments: int) -> dict:
                 'acceleration': round(float(acceleration[piece, joint]), 12),
                 'velocity': round(float(velocity[piece, joint]), 12)}
                for piece in range(pieces)] for joint in range(trajectory.joint_count)]
-    return {'peak_jerk': _rows(peak_jerk(trajectory)), 'phases': phases}
+    return {'peak_jerk': _rows(trajectory.peak_jerk()), 'phases': phases}
 
 
 def _pair_label(index: int, count: int) -> str:

@@ -73,7 +73,7 @@ def limit_violation(
 
     The excess is measured relative to the limit; ``LIMIT_TOLERANCE`` of it is allowed.
     """
-    peaks = list(trajectory.peaks())
+    peaks = list(trajectory.peaks()[:2])
     limits = [np.asarray(max_velocity, dtype=float), np.asarray(max_acceleration, dtype=float)]
     names = ['velocity', 'acceleration']
     if max_jerk is not None:

@@ -18,6 +18,7 @@ from traj_gen_ros import validation
 from traj_gen_ros.blends import lspb_via
 from traj_gen_ros.limits import limit_violation
 from traj_gen_ros.polynomial import cubic_via, quintic_via
+from traj_gen_ros.scurve_path import scurve_via, scurve_via_durations
 from traj_gen_ros.timing import check_profile, shortest_duration, via_durations
 from traj_gen_ros.trajectory import Trajectory
 from traj_gen_ros.validation import ArrayLike
@@ -65,6 +66,9 @@ def plan_path(
             'blend_acceleration', blend_acceleration, joint_count)
     if profile == 'cubic' and accelerations is not None:
         raise ValueError('cubic cannot honour accelerations at via points: use quintic')
+    if profile == 'scurve':
+        return _scurve_path(path, durations, velocities, accelerations, v0, a0,
+                            (max_velocity, max_acceleration, max_jerk))
     builders: dict[str, Callable[[np.ndarray], Trajectory]] = {
         'cubic': lambda times: cubic_via(path, times, velocities, v0=v0),
         'quintic': lambda times: quintic_via(path, times, velocities, accelerations, v0=v0,
@@ -88,3 +92,32 @@ def plan_path(
     if limit_violation(plan, max_velocity, limit) is None:
         return plan
     return shortest_duration(lambda scale: build(base * scale), 1.0, max_velocity, limit)
+
+
+def _scurve_path(path: np.ndarray, durations: ArrayLike | None, velocities: str | ArrayLike,
+                 accelerations: ArrayLike | None, v0: ArrayLike, a0: ArrayLike,
+                 limits: tuple) -> Trajectory:
+    """
+    Plan the jerk-limited path: zero acceleration at every via point, from ``(v0, a0)``.
+
+    Its segments are exact state-to-state S-curves, so its limits are its own; timed from
+    the limits when ``durations`` is ``None`` (from rest, stretched by one factor if the
+    start state needs it).
+    """
+    if any(limit is None for limit in limits):
+        raise ValueError('scurve needs max_velocity, max_acceleration and max_jerk')
+    if accelerations is not None:
+        raise ValueError('scurve sets zero acceleration at every via point: leave the '
+                         'accelerations empty')
+    rule = velocities if not isinstance(velocities, str) else 'heuristic'
+
+    def build(times: np.ndarray) -> Trajectory:
+        return scurve_via(path, times, *limits, velocities=rule, v0=v0, a0=a0)
+
+    if durations is not None:
+        return build(validation.segment_durations(durations, len(path) - 1))
+    base = scurve_via_durations(path, *limits, velocities=rule)
+    try:
+        return build(base)
+    except ValueError:
+        return shortest_duration(lambda scale: build(base * scale), 1.0, *limits[:2])

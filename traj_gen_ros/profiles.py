@@ -1,5 +1,5 @@
 """
-The public trajectory API: every Craig ch. 7 profile and minimum-time timing.
+The public trajectory API: every Craig ch. 7 profile, the jerk-limited S-curve, timing.
 
 Positions are scalars (one joint) or 1-D arrays (one value per joint); via points are
 ``(points,)`` or ``(points, joints)``. Every result is a :class:`Trajectory`. Units are
@@ -23,13 +23,16 @@ from traj_gen_ros.polynomial import (
     quintic,
     quintic_via,
 )
+from traj_gen_ros.scurve_move import scurve
+from traj_gen_ros.scurve_path import scurve_via
 from traj_gen_ros.timing import hold, min_time, PROFILES, via_durations
-from traj_gen_ros.trajectory import Trajectory
+from traj_gen_ros.trajectory import JerkLimitedTrajectory, Trajectory
 
 __all__ = [
     'PROFILES',
     'LIMIT_TOLERANCE',
     'BlendedTrajectory',
+    'JerkLimitedTrajectory',
     'JointError',
     'Trajectory',
     'brake',
@@ -45,6 +48,8 @@ __all__ = [
     'plan_path',
     'quintic',
     'quintic_via',
+    'scurve',
+    'scurve_via',
     'Violation',
     'via_durations',
     'within_limits',

@@ -17,7 +17,7 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from traj_gen_ros.trajectory import Trajectory
+from traj_gen_ros.trajectory import JerkLimitedTrajectory, Trajectory
 
 if TYPE_CHECKING:
     from traj_gen_ros.scurve_ruckig import Move
@@ -69,7 +69,7 @@ def rest_to_rest(move: Move) -> tuple[Trajectory, float] | None:
     breakpoints = np.array(times)[:, None]
     if not (np.isfinite(coefficients).all() and np.isfinite(breakpoints).all()):
         return None
-    return Trajectory(breakpoints, coefficients), float(breakpoints[-1, 0])
+    return JerkLimitedTrajectory(breakpoints, coefficients), float(breakpoints[-1, 0])
 
 
 def composed(move: Move, plan_move: Callable[[Move], tuple[Trajectory, float]]
@@ -117,7 +117,7 @@ def composed(move: Move, plan_move: Callable[[Move], tuple[Trajectory, float]]
         breakpoints[:len(times), joint] = times
         table[:, :, joint] = hold  # zero-length padding at the end holds the goal
         table[:len(coefficients), :, joint] = coefficients
-    return Trajectory(breakpoints, table), duration
+    return JerkLimitedTrajectory(breakpoints, table), duration
 
 
 def _minimum_time(move: Move) -> Move:

@@ -24,7 +24,7 @@ import math
 import numpy as np
 import ruckig
 from traj_gen_ros import scurve_fallback, validation
-from traj_gen_ros.trajectory import Trajectory
+from traj_gen_ros.trajectory import JerkLimitedTrajectory, Trajectory
 
 PHASES = 7  # jerk phases of one S-curve; braking adds two before them
 DURATION_TOLERANCE = 1e-13  # relative: a plan this close to the asked duration meets it
@@ -339,7 +339,7 @@ def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Fl
     if not (validation.every(np.isfinite(coefficients))
             and validation.every(np.isfinite(breakpoints))):
         return 'the plan overflows in these units'
-    return Trajectory(breakpoints, coefficients)
+    return JerkLimitedTrajectory(breakpoints, coefficients)
 
 
 def _within(phases: np.ndarray, limits: tuple[Floats, Floats, Floats]) -> bool:

@@ -26,10 +26,12 @@ from traj_gen_ros.blends import lspb_via, three_pieces
 from traj_gen_ros.limits import JointError, within_limits
 from traj_gen_ros.polynomial import cubic, cubic_via, quintic, quintic_via
 from traj_gen_ros.polynomial_timing import minimum_duration, SHORTEST_POLYNOMIAL
+from traj_gen_ros.scurve_move import scurve_min_time
+from traj_gen_ros.scurve_path import scurve_via_durations
 from traj_gen_ros.trajectory import Trajectory
 from traj_gen_ros.validation import ArrayLike
 
-PROFILES = ('lspb', 'cubic', 'quintic')
+PROFILES = ('lspb', 'cubic', 'quintic', 'scurve')
 # (peak velocity, peak acceleration) of a rest-to-rest unit move in unit time.
 _POLYNOMIAL_PEAKS = {'cubic': (1.5, 6.0), 'quintic': (15.0 / 8.0, 10.0 / np.sqrt(3.0))}
 _BISECTION_STEPS = 60
@@ -49,9 +51,13 @@ def min_time(
     profile: str = 'lspb',
     v0: ArrayLike = 0.0,
     a0: ArrayLike = 0.0,
+    max_jerk: ArrayLike | None = None,
 ) -> Trajectory:
     """
     Plan the shortest synchronised ``profile`` trajectory from ``q0`` to rest at ``qf``.
+
+    The one entry point for a move from a state ``(q0, v0, a0)``: the node and
+    ``traj-gen`` both plan goals with it.
 
     :param q0: start position (rad), scalar or one per joint.
     :param qf: goal position (rad), scalar or one per joint.
@@ -59,9 +65,12 @@ def min_time(
     :param max_acceleration: acceleration limit (rad/s²), scalar or one per joint.
     :param profile: ``"lspb"`` (time-optimal trapezoid, triangular when the velocity limit is
         never reached), ``"cubic"`` or ``"quintic"`` (the duration at which the
-        binding limit is just met).
+        binding limit is just met), ``"scurve"`` (jerk-limited, seven phases:
+        :func:`traj_gen_ros.scurve_move.scurve_min_time`).
     :param v0: start velocity (rad/s), extension for replanning a moving joint.
-    :param a0: start acceleration (rad/s²), used by the quintic only.
+    :param a0: start acceleration (rad/s²), used by the quintic and the S-curve.
+    :param max_jerk: jerk limit (rad/s³), scalar or one per joint: the S-curve's, required
+        by it and unused by the other profiles.
 
     For LSPB from rest every other joint runs its own optimal trapezoid stretched in time
     to the common duration (acceleration scaled by ``(T_joint/T)²``, velocity by
@@ -69,10 +78,14 @@ def min_time(
     length gives a zero-duration trajectory that holds ``q0``.
 
     """
+    check_profile(profile)
+    if profile == 'scurve':
+        if max_jerk is None:
+            raise ValueError('profile scurve needs max_jerk (rad/s^3, > 0)')
+        return _scurve_min_time(q0, qf, max_velocity, max_acceleration, v0, a0, max_jerk)
     rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0, a0=a0, max_velocity=max_velocity,
                                      max_acceleration=max_acceleration)
     validation.require_positive(rows[4:], ('max_velocity', 'max_acceleration'))
-    check_profile(profile)
     # Overflow and underflow are looked for in the result, which names the joint.
     with np.errstate(over='ignore', under='ignore', divide='ignore', invalid='ignore'):
         try:
@@ -80,6 +93,16 @@ def min_time(
         except (OverflowError, ZeroDivisionError):
             plan = None
     return require_finite(plan, rows)
+
+
+def _scurve_min_time(q0: ArrayLike, qf: ArrayLike, max_velocity: ArrayLike,
+                     max_acceleration: ArrayLike, v0: ArrayLike, a0: ArrayLike,
+                     max_jerk: ArrayLike) -> Trajectory:
+    """Validate and plan the time-optimal S-curve (it checks its own results)."""
+    rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0, a0=a0, max_velocity=max_velocity,
+                                     max_acceleration=max_acceleration, max_jerk=max_jerk)
+    validation.require_positive(rows[4:], ('max_velocity', 'max_acceleration', 'max_jerk'))
+    return scurve_min_time(*rows)
 
 
 def _plan(profile: str, start: np.ndarray, goal: np.ndarray, start_velocity: np.ndarray,
@@ -228,9 +251,13 @@ def via_durations(
     profile: str = 'cubic',
     velocities: str = 'heuristic',
     acceleration: ArrayLike | None = None,
+    max_jerk: ArrayLike | None = None,
 ) -> np.ndarray:
     """
     Segment durations (s) that keep a via-point path within the limits.
+
+    ``scurve`` (with ``max_jerk``, rad/s³) is timed by
+    :func:`traj_gen_ros.scurve_path.scurve_via_durations`.
 
     Each segment starts from its own rest-to-rest minimum time for the slowest joint;
     the whole path is then stretched by one factor, found by bisection on the exact peaks
@@ -243,6 +270,11 @@ def via_durations(
     max_acceleration = validation.positive_per_joint(
         'max_acceleration', max_acceleration, joint_count)
     check_profile(profile)
+    if profile == 'scurve':
+        if max_jerk is None:
+            raise ValueError('profile scurve needs max_jerk (rad/s^3, > 0)')
+        return scurve_via_durations(path, max_velocity, max_acceleration, max_jerk,
+                                    velocities)
     if velocities not in ('heuristic', 'continuous'):
         raise ValueError(f'velocities must be "heuristic" or "continuous", got "{velocities}"')
     blend_acceleration = max_acceleration if acceleration is None else (

@@ -167,6 +167,15 @@ class Trajectory:
         return states
 
 
+class JerkLimitedTrajectory(Trajectory):
+    """A jerk-limited (S-curve) trajectory of cubic pieces: ``peaks()`` also gives jerk."""
+
+    def peaks(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Find the largest ``|velocity|``, ``|acceleration|`` and ``|jerk|`` per joint."""
+        velocity, acceleration = super().peaks()
+        return velocity, acceleration, self.peak_jerk()
+
+
 def _horner(
     coefficients: np.ndarray, local_time: np.ndarray, degree: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

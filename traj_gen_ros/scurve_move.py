@@ -130,13 +130,6 @@ def fixed_duration(move: Move, caller: str, what: str) -> Trajectory:
                      f'works is {round_up(reached)} s')
 
 
-def peak_jerk(trajectory: Trajectory) -> np.ndarray:
-    """Return each joint's largest ``|jerk|`` (rad/s³), ``max |6 c3|`` over the pieces."""
-    if trajectory.degree < 3:
-        return np.zeros(trajectory.joint_count)
-    return 6.0 * np.abs(trajectory.coefficients[:, 3]).max(axis=0)
-
-
 def round_up(value: float, digits: int = 9) -> str:
     """``value`` rounded up to ``digits`` significant digits, so the printed number works."""
     if not math.isfinite(value) or value <= 0.0:

@@ -2,7 +2,7 @@
 Jerk-limited (S-curve) paths through via points, and their durations from the limits.
 
 Each segment is one fixed-duration, state-to-state seven-phase S-curve (Ruckig with
-``minimum_duration`` and a target velocity; see :mod:`traj_gen_ros.scurve`) from
+``minimum_duration`` and a target velocity; see :mod:`traj_gen_ros.scurve_move`) from
 ``(θ_k, θ̇_k, 0)`` to ``(θ_k+1, θ̇_k+1, 0)``: the path passes through every via point at its
 time, with zero acceleration there, so position, velocity and acceleration are
 continuous and jerk, acceleration and velocity stay within their limits. Via velocities
@@ -15,18 +15,29 @@ Units: rad (or m), rad/s, rad/s², rad/s³, s.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from traj_gen_ros import validation
 from traj_gen_ros.polynomial import heuristic_velocities
-from traj_gen_ros.scurve import fixed_duration, round_up
+from traj_gen_ros.scurve_move import fixed_duration, round_up
 from traj_gen_ros.scurve_ruckig import LIMIT_NAMES, minimum_duration, Move, plan_move
-from traj_gen_ros.trajectory import Trajectory
+from traj_gen_ros.trajectory import JerkLimitedTrajectory, Trajectory
 from traj_gen_ros.validation import ArrayLike
 
 _SCALE_STEPS = 200  # bound on the halvings/doublings of the duration search
 _BISECTION_TOLERANCE = 1e-12
 _FIXED_POINT_STEPS = 30
+
+
+class Start(NamedTuple):
+    """The path's start velocity (rad/s) and acceleration (rad/s²), per joint or scalar."""
+
+    velocity: np.ndarray | float
+    acceleration: np.ndarray | float
+
+
+REST = Start(0.0, 0.0)
 
 
 def scurve_via(
@@ -36,6 +47,8 @@ def scurve_via(
     max_acceleration: ArrayLike,
     max_jerk: ArrayLike,
     velocities: str | ArrayLike = 'heuristic',
+    v0: ArrayLike = 0.0,
+    a0: ArrayLike = 0.0,
 ) -> Trajectory:
     """
     Plan a jerk-limited path through every via point at its time.
@@ -48,23 +61,27 @@ def scurve_via(
     :param velocities: ``"heuristic"`` (Craig's rule: mean of the neighbouring slopes,
         0 where the slope changes sign; rest at both ends) or the velocity at every point
         (rad/s), ``(points, joints)``.
+    :param v0: start velocity (rad/s) for the heuristic (given velocities include it).
+    :param a0: start acceleration (rad/s²): the first segment starts from it (replanning
+        a moving joint); the path ends at rest.
 
-    Acceleration is zero at every via point. Raises ``ValueError`` naming the segment
-    and the smallest duration that works for it when a segment cannot be planned (with
+    Acceleration is zero at every via point after the start. Raises ``ValueError`` naming
+    the segment and the smallest duration that works for it when a segment cannot be planned (with
     heuristic velocities, which change with the segment's duration, the smallest one a
     fixed-point iteration finds, checked to work), or naming the point and joint whose
     via velocity exceeds ``max_velocity``.
     """
     path, durations, limits, spec = _validated(points, durations, max_velocity,
                                                max_acceleration, max_jerk, velocities)
-    via = _via_velocities(path, durations, spec)
+    start = Start(*validation.per_joint_rows(v0=v0, a0=a0, like=path[0]))
+    via = _via_velocities(path, durations, spec, start)
     if spec is None:
-        _check_heuristic(path, durations, limits, via)
+        _check_heuristic(path, durations, limits, via, start)
     else:
         _check_velocities(via, limits[0], spec)
     pieces = []
     for segment in range(len(durations)):
-        move = _segment(path, via, durations, limits, segment)
+        move = _segment(path, via, durations, limits, segment, start)
         try:
             pieces.append(fixed_duration(
                 move, 'scurve_via', f'segment {segment} (points {segment} to {segment + 1}): '
@@ -75,7 +92,7 @@ def scurve_via(
                                  f'{segment + 1}): {error}') from None
             if spec is not None:
                 raise
-            smallest = _smallest_heuristic(path, durations, limits, segment)
+            smallest = _smallest_heuristic(path, durations, limits, segment, start)
             raise ValueError(
                 f'scurve_via: segment {segment} (points {segment} to {segment + 1}) cannot '
                 f'take {durations[segment]:g} s with the heuristic via velocities '
@@ -85,7 +102,7 @@ def scurve_via(
 
 
 def _check_heuristic(path: np.ndarray, durations: np.ndarray, limits: tuple,
-                     via: np.ndarray) -> None:
+                     via: np.ndarray, start: Start) -> None:
     """
     Refuse a heuristic via velocity above ``max_velocity``.
 
@@ -100,7 +117,7 @@ def _check_heuristic(path: np.ndarray, durations: np.ndarray, limits: tuple,
         slopes = np.abs(np.diff(path[:, joint]) / durations)
     segment = max((s for s in (point - 1, point) if 0 <= s < len(durations)),
                   key=lambda s: slopes[s])
-    smallest = _smallest_heuristic(path, durations, limits, segment)
+    smallest = _smallest_heuristic(path, durations, limits, segment, start)
     raise ValueError(
         f'scurve_via: segment {segment} (points {segment} to {segment + 1}) is too short: '
         f'the heuristic via velocity at point {point}, joint {joint} is '
@@ -198,15 +215,15 @@ def _validated(points: ArrayLike, durations: ArrayLike, max_velocity: ArrayLike,
 
 
 def _via_velocities(path: np.ndarray, durations: np.ndarray,
-                    spec: np.ndarray | None) -> np.ndarray:
+                    spec: np.ndarray | None, start: Start = REST) -> np.ndarray:
     """Velocities at every point (rad/s): the given ones, or Craig's heuristic."""
-    return _heuristic(path, durations) if spec is None else spec
+    return _heuristic(path, durations, start) if spec is None else spec
 
 
-def _heuristic(path: np.ndarray, durations: np.ndarray) -> np.ndarray:
-    """Craig's heuristic velocities; an overflowing slope gives ``inf`` (refused later)."""
+def _heuristic(path: np.ndarray, durations: np.ndarray, start: Start = REST) -> np.ndarray:
+    """Craig's heuristic velocities from ``start``; an overflowing slope gives ``inf``."""
     with np.errstate(all='ignore'):
-        velocities = heuristic_velocities(path, durations)
+        velocities = heuristic_velocities(path, durations, start.velocity)
     return np.where(np.isnan(velocities), np.inf, velocities)
 
 
@@ -223,10 +240,11 @@ def _check_velocities(via: np.ndarray, max_velocity: np.ndarray,
 
 
 def _segment(path: np.ndarray, via: np.ndarray, durations: np.ndarray, limits: tuple,
-             segment: int) -> Move:
+             segment: int, start: Start = REST) -> Move:
     """Return segment ``segment`` as a fixed-duration state-to-state move."""
+    acceleration = start.acceleration if segment == 0 else 0.0
     return Move(path[segment].tolist(), path[segment + 1].tolist(), via[segment].tolist(),
-                [0.0] * path.shape[1], via[segment + 1].tolist(),
+                np.broadcast_to(acceleration, path.shape[1]).tolist(), via[segment + 1].tolist(),
                 tuple(limit.tolist() for limit in limits), float(durations[segment]))
 
 
@@ -241,13 +259,13 @@ def _shortest(path: np.ndarray, via: np.ndarray, durations: np.ndarray, limits: 
 
 
 def _segment_feasible(path: np.ndarray, durations: np.ndarray, limits: tuple,
-                      segment: int) -> bool:
+                      segment: int, start: Start = REST) -> bool:
     """Tell whether ``segment`` meets its duration with the heuristic velocities."""
-    via = _heuristic(path, durations)
+    via = _heuristic(path, durations, start)
     ends = np.abs(via[segment:segment + 2]) <= limits[0]
     if not validation.every(ends):
         return False
-    move = _segment(path, via, durations, limits, segment)
+    move = _segment(path, via, durations, limits, segment, start)
     try:
         return plan_move(move)[1] == move.duration
     except ValueError:
@@ -264,7 +282,7 @@ def _feasible(path: np.ndarray, durations: np.ndarray, limits: tuple) -> bool:
 
 
 def _smallest_heuristic(path: np.ndarray, durations: np.ndarray, limits: tuple,
-                        segment: int) -> str:
+                        segment: int, start: Start = REST) -> str:
     """
     Find a small duration of ``segment`` that works, the others unchanged, as text.
 
@@ -274,23 +292,23 @@ def _smallest_heuristic(path: np.ndarray, durations: np.ndarray, limits: tuple,
     """
     trial = durations.copy()
     for _ in range(_FIXED_POINT_STEPS):
-        via = _heuristic(path, trial)
+        via = _heuristic(path, trial, start)
         if not validation.every(np.abs(via[segment:segment + 2]) <= limits[0]):
             break
         try:
-            shortest = minimum_duration(_segment(path, via, trial, limits, segment))
+            shortest = minimum_duration(_segment(path, via, trial, limits, segment, start))
         except ValueError:
             break
         if shortest <= 0.0:
             break
         trial[segment] = shortest
-        if _segment_feasible(path, trial, limits, segment):
+        if _segment_feasible(path, trial, limits, segment, start):
             return f'{round_up(shortest)} s'
     low = high = float(durations[segment])
     for _ in range(_SCALE_STEPS):
         high *= 2.0
         trial[segment] = high
-        if _segment_feasible(path, trial, limits, segment):
+        if _segment_feasible(path, trial, limits, segment, start):
             break
         low = high
     else:
@@ -298,7 +316,7 @@ def _smallest_heuristic(path: np.ndarray, durations: np.ndarray, limits: tuple,
                 'lengthen that segment')
     while high - low > _BISECTION_TOLERANCE * high:
         trial[segment] = 0.5 * (low + high)
-        if _segment_feasible(path, trial, limits, segment):
+        if _segment_feasible(path, trial, limits, segment, start):
             high = trial[segment]
         else:
             low = trial[segment]
@@ -312,4 +330,4 @@ def _concatenate(pieces: list[Trajectory], durations: np.ndarray) -> Trajectory:
                    for index, piece in enumerate(pieces)]
     breakpoints.append(np.full((1, pieces[0].joint_count), starts[-1]))
     coefficients = np.concatenate([piece.coefficients for piece in pieces])
-    return Trajectory(np.concatenate(breakpoints), coefficients)
+    return JerkLimitedTrajectory(np.concatenate(breakpoints), coefficients)
