@@ -59,9 +59,10 @@ BAD_REQUESTS = {
     'first point at t=0 elsewhere': (
         via_message(['joint_4'], [([1.0], 0.0), ([1.1], 1.0)]),
         "point 0 has time_from_start 0 but joint 'joint_4' is at"),
-    'velocity limit': (via_message(['joint_2'], [([3.0], 1.0)]),
-                       r"joint 'joint_2' would reach velocity .* above max_velocity 2 rad/s.*"
-                       r'the minimum feasible duration is'),
+    # The largest excess is named: here acceleration (x4.3) before velocity (x2.25).
+    'limit': (via_message(['joint_2'], [([3.0], 1.0)]),
+              r"joint 'joint_2' would reach acceleration .* above max_acceleration 4 rad/s\^2"
+              r'.*the minimum feasible duration is'),
 }
 
 

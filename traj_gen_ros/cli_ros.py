@@ -25,7 +25,7 @@ import sys
 import time
 
 import numpy as np
-from traj_gen_ros.cli import (
+from traj_gen_ros.cli_args import (
     EXIT_NO_ANSWER,
     EXIT_OK,
     EXIT_REFUSED,
