@@ -104,7 +104,12 @@ def plan_goal(config: Config, state: State, hold_at: np.ndarray,
             'the motion has slowed, or call ~/stop first')
         raise RequestError(f'cannot plan the goal with profile {config.profile}{moving}: '
                            f'{error}') from None
-    violation = limit_violation(plan, config.max_velocity, config.profile_acceleration)
+    # As in the core: a start already at (or, after limits were lowered, beyond) a limit
+    # may stay at that level while it slows down.
+    a_limit = config.profile_acceleration
+    violation = limit_violation(
+        plan, np.maximum(config.max_velocity, np.abs(velocity)),
+        np.maximum(a_limit, np.abs(acceleration)) if quintic else a_limit)
     if violation is not None:
         raise RequestError('the minimum-time plan breaks a limit: '
                            f'{violation.describe(config.joints)}')
