@@ -47,7 +47,7 @@ from traj_gen_ros.answers import Answers
 from traj_gen_ros.motion_planning import held
 from traj_gen_ros.node_config import Config, initial_state, make_config, MAX_RATE_HZ, MIN_RATE_HZ
 from traj_gen_ros.request_handler import REQUEST_DEPTH, RequestHandler
-from traj_gen_ros.stream import Stream
+from traj_gen_ros.stream import favour_calling_thread, Stream
 from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
@@ -95,10 +95,10 @@ class TrajectoryGenerator(Node):
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._answers.trajectory(0, held(initial), self._config.rate_hz)  # warm up
-        self._stream.start()
+        priority = self._stream.start()
         self.get_logger().info(
-            f'streaming {len(self._config.joints)} joints at {self._config.rate_hz:g} Hz, '
-            f'profile {self._config.profile}')
+            f'streaming {len(self._config.joints)} joints at {self._config.rate_hz:g} Hz '
+            f'({priority}), profile {self._config.profile}')
 
     # ------------------------------------------------------------------ requests
 
@@ -178,6 +178,7 @@ def main(args: list[str] | None = None) -> int:
     s: a signal that arrives while the node or the executor is being built interrupts
     nothing half-made, and the node is then destroyed in order (exit status 0).
     """
+    favour_calling_thread()  # before rclpy starts its threads: they inherit it
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):

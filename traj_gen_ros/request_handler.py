@@ -16,9 +16,10 @@ answers the older valid ones "superseded", and executes the newest right away:
    first setpoint of the new motion (a client reading the answer sees it started; a
    delayed start is answered at once) (:mod:`traj_gen_ros.answers`).
 
-If the stream published the start tick while the request was being planned (planning took
-longer than the time to the tick: a long path, a loaded machine), the request is planned
-again from a later tick, at most ``PLAN_ATTEMPTS`` times, then refused.
+The start tick is the first one at least the last request's planning time away (so the
+plan is ready by then). If the stream published the start tick while the request was
+being planned anyway (a long path, a loaded machine), the request is planned again from a
+later tick, at most ``PLAN_ATTEMPTS`` times, then refused.
 """
 
 from __future__ import annotations
@@ -57,8 +58,13 @@ REQUEST_DEPTH = 1000
 #: the next round then drains a batch at once, so the executor thread holds the GIL less
 #: and the stream keeps its rate. A request after a quiet spell is not delayed.
 REQUEST_ROUND_PERIOD = 0.005
-#: A request whose start tick the stream passed while it was planned is planned again
-#: from a later tick (margin: twice the time it took), at most this often.
+#: A new motion starts at the first tick at least MARGIN_FACTOR x the last request's
+#: planning and sampling time away, so that it is ready by then (a few hundred us: most
+#: often the very next tick). One whose start tick the stream passed while it was planned
+#: anyway is planned again from a later tick (twice the time it took, at most
+#: MAX_MARGIN_NS away), at most PLAN_ATTEMPTS times in all.
+MARGIN_FACTOR = 1.25
+MAX_MARGIN_NS = 500_000_000
 PLAN_ATTEMPTS = 3
 #: The OK status waits at most this long (s) for the motion's first setpoint.
 ANSWER_WAIT = 0.1
@@ -83,6 +89,7 @@ class RequestHandler:
         self._now_ns = now_ns
         self._log_error = log_error
         self._last_round = 0.0  # time.monotonic() at the end of the last request callback
+        self._expected_ns = 0  # how long the last request took to plan and sample (ns)
 
     # ------------------------------------------------------------------ take and parse
 
@@ -154,7 +161,7 @@ class RequestHandler:
         Returns the motion spliced in, or ``None`` when it was refused (answered ERROR).
         """
         config = self._config()
-        margin_ns = 0
+        margin_ns = self._expected_ns
         for _ in range(PLAN_ATTEMPTS):
             began = time.perf_counter_ns()
             now_ns = self._now_ns()
@@ -170,13 +177,15 @@ class RequestHandler:
                 self._log_error(f'unexpected failure planning {request.kind}: {error!r}')
                 self._answers.refused(request, f'internal error: {error}')
                 return None
+            elapsed_ns = time.perf_counter_ns() - began
             if self._stream.splice(start_ns, motion):
+                self._expected_ns = min(int(elapsed_ns * MARGIN_FACTOR), MAX_MARGIN_NS)
                 self._answers.publish_trajectory(message)
                 if start_ns - now_ns <= ANSWER_WAIT * 1e9:
                     self._stream.wait_published(start_ns, ANSWER_WAIT)
                 self._answers.accepted(request, motion, now_ns, start_ns)
                 return motion
-            margin_ns = 2 * (time.perf_counter_ns() - began)
+            margin_ns = min(2 * elapsed_ns, MAX_MARGIN_NS)
         self._answers.refused(request, f'the stream passed its start {PLAN_ATTEMPTS} times '
                               f'while it was planned (last margin {margin_ns * 1e-9:.3f} s); '
                               'resend it')

@@ -30,8 +30,24 @@ from traj_gen_ros.trajectory_wire import joint_names_cdr, joint_state_cdr
 #: Real-time priority of the stream thread under ``SCHED_FIFO`` (1 lowest, 99 highest):
 #: above every normal process, below the kernel's own real-time threads.
 FIFO_PRIORITY = 10
-#: Nice value of the stream thread when ``SCHED_FIFO`` is not permitted.
+#: Nice value of the node's threads (the stream's when ``SCHED_FIFO`` is not permitted).
 STREAM_NICE = -10
+
+
+def favour_calling_thread(nice: int = STREAM_NICE) -> bool:
+    """
+    Lower the calling thread's nice value to ``nice`` if permitted; tell whether it did.
+
+    On Linux the nice value is per thread and threads started later inherit it: called
+    before ``rclpy.init()``, it covers the executor and the DDS threads too. Then a thread
+    holding the GIL is seldom preempted by normal processes, so the stream thread, which
+    needs the GIL for every tick, is not kept waiting for it on a busy machine.
+    """
+    try:
+        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), nice)
+    except (AttributeError, OSError):
+        return False
+    return True
 
 
 def raise_priority() -> str:
@@ -48,11 +64,9 @@ def raise_priority() -> str:
         return f'SCHED_FIFO priority {FIFO_PRIORITY}'
     except (AttributeError, OSError):
         pass
-    try:
-        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), STREAM_NICE)
+    if favour_calling_thread(STREAM_NICE):
         return f'nice {STREAM_NICE}'
-    except (AttributeError, OSError):
-        return 'normal priority (not permitted to raise it)'
+    return 'normal priority (not permitted to raise it)'
 
 
 class Stream:
@@ -83,11 +97,14 @@ class Stream:
         self._next_tick_ns = now_ns()
         self.stopping = threading.Event()
         self.priority = 'not started'
+        self._started = threading.Event()
         self._thread = threading.Thread(target=self._run, name='stream', daemon=True)
 
-    def start(self) -> None:
-        """Start the streaming thread."""
+    def start(self) -> str:
+        """Start the streaming thread; return the priority it got (:func:`raise_priority`)."""
         self._thread.start()
+        self._started.wait(1.0)
+        return self.priority
 
     def stop(self, timeout: float = 2.0) -> None:
         """Ask the thread to end and wait for it (s)."""
@@ -159,6 +176,7 @@ class Stream:
         restarts the grid from now; no two setpoints carry the same stamp.
         """
         self.priority = raise_priority()
+        self._started.set()
         next_ns = self._now_ns()
         while True:
             period_ns = self._period_ns()
