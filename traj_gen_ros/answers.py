@@ -4,9 +4,10 @@ What the node says about each request: ``~/status`` and, for an accepted plan, `
 Every request gets exactly one answer on ``~/status`` (``diagnostic_msgs/DiagnosticStatus``,
 its ``values`` carry ``request``, ``request_id`` and ``frame_id`` so a client can match
 it): OK when accepted (with profile, duration and start delay), ERROR with the reason when
-refused, WARN when a newer request superseded it before it was planned. Superseded
-requests are answered together, one status listing them, at most ``SUPERSEDED_WINDOW`` s
-late: under a flood one status per window instead of one per request.
+refused, WARN when a newer request superseded it before it was planned. The requests a
+newer one superseded are answered together, in one status listing them, just before the
+newer one's own answer: under a flood one status per batch instead of one per request,
+and no request is answered after a newer one.
 
 An accepted plan is published on ``~/trajectory`` sampled every ``1/rate_hz`` s, written
 straight to CDR from the sample arrays (:mod:`traj_gen_ros.trajectory_wire`).
@@ -26,8 +27,6 @@ from traj_gen_ros.motion_planning import PlannedMotion, sample_motion
 from traj_gen_ros.trajectory_wire import joint_trajectory_cdr
 from trajectory_msgs.msg import JointTrajectory
 
-#: Requests superseded by newer ones are answered together, at most this late (s).
-SUPERSEDED_WINDOW = 0.02
 #: Depth of the status publisher: a burst of answers is kept for slow readers.
 STATUS_DEPTH = 1000
 
@@ -46,7 +45,7 @@ class Answers:
     """The ``~/status`` and ``~/trajectory`` publishers and what goes on them."""
 
     def __init__(self, node: Node, joint_names: Callable[[], Sequence[str]]) -> None:
-        """Create the publishers and the timer that answers superseded requests."""
+        """Create the ``~/trajectory`` and ``~/status`` publishers."""
         self._node = node
         self._joint_names = joint_names
         self._received = 0
@@ -57,8 +56,6 @@ class Answers:
             QoSProfile(depth=1, reliability=reliable, durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self._status = node.create_publisher(
             DiagnosticStatus, '~/status', QoSProfile(depth=STATUS_DEPTH, reliability=reliable))
-        self._timer = node.create_timer(SUPERSEDED_WINDOW, self._answer_superseded)
-        self._timer.cancel()  # runs only while superseded requests wait
 
     def values(self, kind: str, frame_id: str) -> dict[str, str]:
         """Give a new request its id; return the values every answer to it carries."""
@@ -83,6 +80,7 @@ class Answers:
     def accepted(self, request: Request, motion: PlannedMotion, now_ns: int,
                  start_ns: int) -> None:
         """Answer OK with the plan's profile, duration and start delay."""
+        self._answer_superseded()
         duration = motion.plan.duration
         joints = len(self._joint_names())
         text = f'accepted: profile={motion.profile}, duration={duration:.3f} s, joints={joints}'
@@ -97,16 +95,14 @@ class Answers:
 
     def refused(self, request: Request, reason: str) -> None:
         """Answer ERROR: ``<kind> refused: <reason>``."""
+        self._answer_superseded()
         self.report(DiagnosticStatus.ERROR, f'{request.kind} refused: {reason}', request.values)
 
     def superseded(self, requests: list[Request]) -> None:
-        """Answer ``requests`` as superseded, together, within ``SUPERSEDED_WINDOW`` s."""
-        if requests and not self._superseded:
-            self._timer.reset()
+        """Answer ``requests`` as superseded, together, before the next request's answer."""
         self._superseded += requests
 
     def _answer_superseded(self) -> None:
-        self._timer.cancel()
         requests, self._superseded = self._superseded, []
         if len(requests) == 1:
             self.report(DiagnosticStatus.WARN, f'{requests[0].kind} superseded by a newer '

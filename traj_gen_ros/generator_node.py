@@ -24,6 +24,7 @@ Interface (all names relative, so namespaces and remapping work):
 
 from __future__ import annotations
 
+import gc
 import signal
 import sys
 import threading
@@ -47,7 +48,12 @@ from traj_gen_ros.answers import Answers
 from traj_gen_ros.motion_planning import held
 from traj_gen_ros.node_config import Config, initial_state, make_config, MAX_RATE_HZ, MIN_RATE_HZ
 from traj_gen_ros.request_handler import REQUEST_DEPTH, RequestHandler
-from traj_gen_ros.stream import favour_calling_thread, Stream
+from traj_gen_ros.stream import (
+    EXECUTOR_FIFO_PRIORITY,
+    favour_calling_thread,
+    realtime_calling_thread,
+    Stream,
+)
 from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
@@ -186,10 +192,18 @@ def main(args: list[str] | None = None) -> int:
     sys.setswitchinterval(SWITCH_INTERVAL)
     node = None
     status = 0
+    gc.collect()  # before the stream runs: a full collection holds the GIL for ~30 ms
     try:
         node = TrajectoryGenerator()
         executor = SingleThreadedExecutor()
         executor.add_node(node)
+        # What exists now lives as long as the node: out of the collector's sight, later
+        # full collections (which hold the GIL, so the stream waits) stay short.
+        gc.freeze()
+        # The executor thread holds the GIL while it plans: preempted by a normal process
+        # then, it would keep the stream waiting. Below the stream's priority; set after
+        # rclpy started its DDS threads, which stay normal (nice -10) threads.
+        realtime_calling_thread(EXECUTOR_FIFO_PRIORITY)
         while not stop.is_set():
             executor.spin_once(timeout_sec=SIGNAL_POLL)
     except ExternalShutdownException:

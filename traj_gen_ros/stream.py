@@ -30,6 +30,8 @@ from traj_gen_ros.trajectory_wire import joint_names_cdr, joint_state_cdr
 #: Real-time priority of the stream thread under ``SCHED_FIFO`` (1 lowest, 99 highest):
 #: above every normal process, below the kernel's own real-time threads.
 FIFO_PRIORITY = 10
+#: Real-time priority of the executor thread (requests, planning): below the stream's.
+EXECUTOR_FIFO_PRIORITY = 5
 #: Nice value of the node's threads (the stream's when ``SCHED_FIFO`` is not permitted).
 STREAM_NICE = -10
 
@@ -50,20 +52,30 @@ def favour_calling_thread(nice: int = STREAM_NICE) -> bool:
     return True
 
 
-def raise_priority() -> str:
+def realtime_calling_thread(priority: int) -> bool:
+    """
+    Put the calling thread under ``SCHED_FIFO`` at ``priority`` if permitted; tell if it did.
+
+    Needs ``CAP_SYS_NICE`` or a matching ``RLIMIT_RTPRIO``. On Linux it applies to the
+    calling thread only (threads it starts later inherit it).
+    """
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+    except (AttributeError, OSError):
+        return False
+    return True
+
+
+def raise_priority(priority: int = FIFO_PRIORITY) -> str:
     """
     Give the calling thread priority over normal processes if permitted; say what it got.
 
-    Tries ``SCHED_FIFO`` at :data:`FIFO_PRIORITY`, then nice :data:`STREAM_NICE` (both
-    need ``CAP_SYS_NICE`` or a matching ``RLIMIT_RTPRIO``/``RLIMIT_NICE``). On Linux both
-    apply to the calling thread only. The thread sleeps between ticks and needs well under
-    a millisecond per tick, so it cannot starve the machine.
+    Tries ``SCHED_FIFO`` at ``priority``, then nice :data:`STREAM_NICE`. The stream thread
+    sleeps between ticks and needs well under a millisecond per tick, so it cannot starve
+    the machine.
     """
-    try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(FIFO_PRIORITY))
-        return f'SCHED_FIFO priority {FIFO_PRIORITY}'
-    except (AttributeError, OSError):
-        pass
+    if realtime_calling_thread(priority):
+        return f'SCHED_FIFO priority {priority}'
     if favour_calling_thread(STREAM_NICE):
         return f'nice {STREAM_NICE}'
     return 'normal priority (not permitted to raise it)'
