@@ -240,8 +240,8 @@ def test_via_durations_keep_the_path_within_limits(profile, rule, path, limits):
     points, _ = path
     max_velocity, max_acceleration = limits
     steps = np.abs(np.diff(points, axis=0))
-    assert_moves = np.max(steps) > 1e-6
-    if not assert_moves:
+    assume(not 0.0 < np.max(steps) <= 1e-6)  # tiny steps: test_via_durations_of_tiny_steps
+    if not np.max(steps):
         with pytest.raises(ValueError, match='nothing to move'):
             via_durations(points, max_velocity, max_acceleration, profile, rule)
         return
@@ -251,6 +251,12 @@ def test_via_durations_keep_the_path_within_limits(profile, rule, path, limits):
     trajectory = VIA_PLANNERS[profile](points, durations, rule, max_acceleration)
     helpers.assert_within(trajectory, max_velocity, max_acceleration)
     assert within_limits(trajectory, max_velocity, max_acceleration)
+
+
+@pytest.mark.parametrize('step', [1.4e-45, 8.5e-198, 1e-13])
+def test_via_durations_of_tiny_steps_have_nothing_to_move(step):
+    with pytest.raises(ValueError, match='nothing to move'):
+        via_durations([[0.0], [0.0], [step]], 1.0, 1.0, 'quintic')
 
 
 def test_via_durations_lspb_with_a_gentler_blend():
