@@ -95,15 +95,14 @@ def plan_goal(config: Config, state: State, hold_at: np.ndarray,
         plan = min_time(state.position, target, config.max_velocity,
                         config.profile_acceleration, config.profile, v0=velocity,
                         a0=acceleration)
-    except JointError:
-        raise
-    except ValueError as error:
+    except ValueError as error:  # JointError too: named by the joint's ROS name
+        reason = error.named(config.joints) if isinstance(error, JointError) else str(error)
         moving = '' if not np.any(velocity) else (
             f' from the current motion (velocity {np.round(velocity, 4).tolist()} rad/s, '
             f'acceleration {np.round(acceleration, 4).tolist()} rad/s^2); resend it when '
             'the motion has slowed, or call ~/stop first')
         raise RequestError(f'cannot plan the goal with profile {config.profile}{moving}: '
-                           f'{error}') from None
+                           f'{reason}') from None
     # As in the core: a start already at (or, after limits were lowered, beyond) a limit
     # may stay at that level while it slows down.
     a_limit = config.profile_acceleration
@@ -172,10 +171,9 @@ def plan_via(config: Config, state: State, hold_at: np.ndarray,
     if times is None:
         try:
             plan = build(None)
-        except JointError:
-            raise
-        except ValueError as error:
-            raise RequestError(f'cannot time the via points: {error}') from None
+        except ValueError as error:  # JointError too: named by the joint's ROS name
+            reason = error.named(config.joints) if isinstance(error, JointError) else error
+            raise RequestError(f'cannot time the via points: {reason}') from None
         note = 'timed from the limits'
     else:
         durations = np.diff(times)
