@@ -138,7 +138,13 @@ class RequestHandler:
                               None)
             self._answers.refused(request, too_many_points(count))
             return None
-        message = deserialize_message(data, JointTrajectory)
+        try:
+            message = deserialize_message(data, JointTrajectory)
+        except Exception as error:  # noqa: BLE001 - bytes from the wire must never kill the node
+            request = Request('via_points', self._answers.values('via_points', frame_id), 0,
+                              None)
+            self._answers.refused(request, f'malformed message: {error}')
+            return None
         stamp = message.header.stamp
         stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # 0 or past: "now"
         request = Request('via_points', self._answers.values(
