@@ -9,12 +9,14 @@ answers the older valid ones "superseded", and executes the newest right away:
 1. the start is the stream's next tick not yet published (or the request's future
    ``header.stamp``), and the start state is the schedule's setpoint there;
 2. plan from that state (:mod:`traj_gen_ros.motion_planning`), refusing with a reason;
-3. sample the plan for ``~/trajectory`` (before it runs: a non-finite sample refuses it);
-4. splice it into the schedule at the start: the stream publishes its first setpoint at
-   that tick (:mod:`traj_gen_ros.stream`);
-5. publish ``~/trajectory`` at once, and the OK status once the stream has published the
-   first setpoint of the new motion (a client reading the answer sees it started; a
-   delayed start is answered at once) (:mod:`traj_gen_ros.answers`).
+3. splice it into the schedule at the start: the stream samples it there and publishes its
+   first setpoint at that tick (:mod:`traj_gen_ros.stream`);
+4. sample the plan for ``~/trajectory`` and publish it, then the OK status once the stream
+   has published the first setpoint of the new motion (a client reading the answer sees
+   it started; a delayed start is answered at once) (:mod:`traj_gen_ros.answers`).
+
+Sampling comes after the splice so that it does not delay the start: a plan that reaches
+the splice has finite coefficients and finite, checked peaks, so its samples are finite.
 
 The start tick is the first one at least the last request's planning time away (so the
 plan is ready by then). If the stream published the start tick while the request was
@@ -24,7 +26,9 @@ later tick, at most ``PLAN_ATTEMPTS`` times, then refused.
 
 from __future__ import annotations
 
+import collections
 from collections.abc import Callable
+import statistics
 import time
 
 from builtin_interfaces.msg import Duration
@@ -58,12 +62,12 @@ REQUEST_DEPTH = 1000
 #: the next round then drains a batch at once, so the executor thread holds the GIL less
 #: and the stream keeps its rate. A request after a quiet spell is not delayed.
 REQUEST_ROUND_PERIOD = 0.005
-#: A new motion starts at the first tick at least MARGIN_FACTOR x the last request's
-#: planning and sampling time away, so that it is ready by then (a few hundred us: most
+#: A new motion starts at the first tick at least the median planning and sampling time
+#: of the last RECENT requests away, so that it is ready by then (a few hundred us: most
 #: often the very next tick). One whose start tick the stream passed while it was planned
 #: anyway is planned again from a later tick (twice the time it took, at most
 #: MAX_MARGIN_NS away), at most PLAN_ATTEMPTS times in all.
-MARGIN_FACTOR = 1.25
+RECENT = 5
 MAX_MARGIN_NS = 500_000_000
 PLAN_ATTEMPTS = 3
 #: The OK status waits at most this long (s) for the motion's first setpoint.
@@ -89,7 +93,8 @@ class RequestHandler:
         self._now_ns = now_ns
         self._log_error = log_error
         self._last_round = 0.0  # time.monotonic() at the end of the last request callback
-        self._expected_ns = 0  # how long the last request took to plan and sample (ns)
+        # How long the last requests took to plan and sample (ns).
+        self._recent_ns: collections.deque[int] = collections.deque([0], maxlen=RECENT)
 
     # ------------------------------------------------------------------ take and parse
 
@@ -162,12 +167,32 @@ class RequestHandler:
 
     def execute(self, request: Request, plan: Planner) -> PlannedMotion | None:
         """
-        Plan ``request`` from the stream's next tick, sample it, splice it in, answer it.
+        Plan ``request`` from the stream's next tick, splice it in, sample it, answer it.
 
         Returns the motion spliced in, or ``None`` when it was refused (answered ERROR).
         """
         config = self._config()
-        margin_ns = self._expected_ns
+        placed = self._plan_and_splice(request, plan, config)
+        if placed is None:
+            return None
+        motion, now_ns, start_ns = placed
+        try:
+            message = self._answers.trajectory(start_ns, motion, config.rate_hz)
+        except Exception as error:  # noqa: BLE001 - checked plans are finite: a bug if not
+            self._log_error(f'sampling an accepted {request.kind} failed: {error!r}; braking')
+            self._brake(config)
+            self._answers.refused(request, f'internal error: {error}')
+            return None
+        self._answers.publish_trajectory(message)
+        if start_ns - now_ns <= ANSWER_WAIT * 1e9:
+            self._stream.wait_published(start_ns, ANSWER_WAIT)
+        self._answers.accepted(request, motion, now_ns, start_ns)
+        return motion
+
+    def _plan_and_splice(self, request: Request, plan: Planner, config: Config
+                         ) -> tuple[PlannedMotion, int, int] | None:
+        """Return the motion spliced in, the time it was planned and its start (ns)."""
+        margin_ns = int(statistics.median(self._recent_ns))
         for _ in range(PLAN_ATTEMPTS):
             began = time.perf_counter_ns()
             now_ns = self._now_ns()
@@ -175,7 +200,6 @@ class RequestHandler:
             state, hold_at = self._stream.state_at(start_ns)
             try:
                 motion = plan(config, state, hold_at)
-                message = self._answers.trajectory(start_ns, motion, config.rate_hz)
             except RequestError as error:
                 self._answers.refused(request, str(error))
                 return None
@@ -185,17 +209,22 @@ class RequestHandler:
                 return None
             elapsed_ns = time.perf_counter_ns() - began
             if self._stream.splice(start_ns, motion):
-                self._expected_ns = min(int(elapsed_ns * MARGIN_FACTOR), MAX_MARGIN_NS)
-                self._answers.publish_trajectory(message)
-                if start_ns - now_ns <= ANSWER_WAIT * 1e9:
-                    self._stream.wait_published(start_ns, ANSWER_WAIT)
-                self._answers.accepted(request, motion, now_ns, start_ns)
-                return motion
+                self._recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
+                return motion, now_ns, start_ns
             margin_ns = min(2 * elapsed_ns, MAX_MARGIN_NS)
         self._answers.refused(request, f'the stream passed its start {PLAN_ATTEMPTS} times '
                               f'while it was planned (last margin {margin_ns * 1e-9:.3f} s); '
                               'resend it')
         return None
+
+    def _brake(self, config: Config) -> None:
+        """Brake from the next tick (after a failure nothing should cause)."""
+        start_ns = self._stream.next_start()
+        state, _ = self._stream.state_at(start_ns)
+        try:
+            self._stream.splice(start_ns, plan_stop(config, state))
+        except ValueError as error:  # a non-finite state: the stream holds its last setpoint
+            self._log_error(f'braking failed: {error!r}')
 
     def stop(self, response: Trigger.Response) -> Trigger.Response:
         """``~/stop``: brake within ``max_acceleration`` from the next tick, then hold."""

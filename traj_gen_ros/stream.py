@@ -23,7 +23,7 @@ import os
 import threading
 
 import numpy as np
-from traj_gen_ros.motion_planning import PlannedMotion, State
+from traj_gen_ros.motion_planning import held, PlannedMotion, State
 from traj_gen_ros.schedule import Schedule
 from traj_gen_ros.trajectory_wire import joint_names_cdr, joint_state_cdr
 
@@ -96,6 +96,7 @@ class Stream:
         :param on_error: logs a failed publish (the stream goes on).
         """
         self._schedule = Schedule(first)
+        self._last_position = first.end.copy()  # the last setpoint published (rad)
         self._names_cdr = joint_names_cdr(list(joint_names))
         self._now_ns = now_ns
         self._period_ns = period_ns
@@ -213,7 +214,16 @@ class Stream:
             if now_ns <= self._last_published_ns:
                 return  # the clock has not moved on (simulated time)
             state = self._schedule.state_at(now_ns)
+            position, velocity = state.position, state.velocity
+            finite = np.count_nonzero(np.isfinite(position)) + \
+                np.count_nonzero(np.isfinite(velocity)) == 2 * position.size
+            if not finite:  # never published: hold the last setpoint from now on
+                position, velocity = self._last_position, np.zeros_like(self._last_position)
+                self._schedule.splice(now_ns, held(position), now_ns)
+            self._last_position = position
             self._last_published_ns = now_ns
-        self._publish(joint_state_cdr(now_ns, self._names_cdr, state.position, state.velocity))
+        if not finite:
+            self._on_error('stream: the schedule gave a non-finite setpoint: holding')
+        self._publish(joint_state_cdr(now_ns, self._names_cdr, position, velocity))
         with self._published:
             self._published.notify_all()
