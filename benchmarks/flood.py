@@ -243,16 +243,13 @@ def run(rate_hz: float = 500.0, request_hz: float = 1000.0, seconds: float = 10.
         recorder.spin_until(lambda: len(recorder.raw) >= idle_first + int(2 * rate_hz),
                             10.0, 'two idle seconds')
         idle = np.diff(recorder.rows(idle_first)[0]) * 1e-9
-        worker = node_pid(pid, b'spawn_main')  # the planning process
         rss_before = rss_kib(pid)
-        worker_before = rss_kib(worker)
         first = len(recorder.raw)
         figures = run_flooder(recorder, 'flood', request_hz, seconds)
         start_ns = figures.pop('began_ns')  # the flood's window: from its first goal on
         end_ns = start_ns + int(seconds * 1e9)
         final = recorder.wait_at_rest(timeout=30.0)
         rss_after = rss_kib(pid)
-        worker_after = rss_kib(worker)
         recorder.destroy_node()
     finally:
         rclpy.shutdown()
@@ -290,8 +287,6 @@ def run(rate_hz: float = 500.0, request_hz: float = 1000.0, seconds: float = 10.
         'finite': bool(np.isfinite(q).all() and np.isfinite(v).all()),
         'rss_kib': {'before': rss_before, 'after': rss_after,
                     'growth': rss_after - rss_before},
-        'worker_rss_kib': {'before': worker_before, 'after': worker_after,
-                           'growth': worker_after - worker_before},
         'exit_code': code, 'traceback': 'Traceback' in output,
     }
 
@@ -325,8 +320,7 @@ def main() -> None:
     print(f"  stream during the flood: {figures['rate_during_flood_hz']} Hz, "
           f"{figures['samples_lost_in_transport']} samples published but not received")
     print(f"  RSS KiB: before {figures['rss_kib']['before']}, after "
-          f"{figures['rss_kib']['after']} (growth {figures['rss_kib']['growth']}); planning "
-          f"worker {figures['worker_rss_kib']['before']} -> {figures['worker_rss_kib']['after']}")
+          f"{figures['rss_kib']['after']} (growth {figures['rss_kib']['growth']})")
     print(f"  largest step / limit: position {figures['max_position_step_vs_limit']}, "
           f"velocity {figures['max_velocity_step_vs_limit']}; final is the newest goal: "
           f"{figures['final_is_newest_goal']}")

@@ -249,22 +249,59 @@ class Probe(Node):
 
 
 @contextlib.contextmanager
-def generator_session(*ros_args: str, generator: str = '/trajectory_generator',
-                      joint_states: str = '/joint_states', goal: str | None = None):
-    """Run a generator subprocess and a ready Probe; on exit check a clean shutdown."""
+def running_node(*ros_args: str, sig: int = signal.SIGINT):
+    """
+    Run a generator subprocess inside an rclpy context of this process; yield it.
+
+    On exit the context is shut down and the node signalled with ``sig``; it must exit
+    with status 0 and no traceback.
+    """
     rclpy.init()
     node = NodeProcess(*ros_args)
-    probe = None
     try:
-        probe = Probe(generator, joint_states, goal=goal)
-        probe.wait_ready()
-        yield probe
+        yield node
     finally:
-        if probe is not None:
-            probe.destroy_node()
         rclpy.shutdown()
-        code = node.stop()
+        code = node.stop(sig)
         output = node.output()
         node.close()
     assert code == 0, output
     assert 'Traceback' not in output, output
+
+
+@contextlib.contextmanager
+def generator_session(*ros_args: str, generator: str = '/trajectory_generator',
+                      joint_states: str = '/joint_states', goal: str | None = None):
+    """Run a generator subprocess and a ready Probe; on exit check a clean shutdown."""
+    with running_node(*ros_args):
+        probe = Probe(generator, joint_states, goal=goal)
+        try:
+            probe.wait_ready()
+            yield probe
+        finally:
+            probe.destroy_node()
+
+
+@contextlib.contextmanager
+def busy_processes(count: int | None = None):
+    """
+    Run ``count`` (default: one per core) busy-looping processes; always end them.
+
+    The load a shared machine puts beside the node: each takes a whole core if it can.
+    """
+    processes = []
+    try:
+        for _ in range(count or os.cpu_count() or 1):
+            processes.append(subprocess.Popen([sys.executable, '-c', 'while True: pass']))
+        yield processes
+    finally:
+        for process in processes:
+            process.kill()
+        for process in processes:
+            process.wait()
+
+
+def stamp_gaps(probe: 'Probe', start_ns: int, end_ns: int | None = None) -> np.ndarray:
+    """Periods (s) between consecutive ``joint_states`` stamps in a window."""
+    times, _, _ = probe.states_between(start_ns, end_ns)
+    return np.diff(times)

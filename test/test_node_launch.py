@@ -3,7 +3,7 @@
 import signal
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from node_harness import generator_session, JOINTS, NodeProcess, Probe, stamp_ns
+from node_harness import generator_session, JOINTS, NodeProcess, Probe, running_node, stamp_ns
 import numpy as np
 import pytest
 import rclpy
@@ -25,9 +25,7 @@ def test_namespaced_and_remapped_launch():
 
 
 def test_sim_time_stamps_follow_the_clock_topic():
-    rclpy.init()
-    node = NodeProcess('-p', 'use_sim_time:=true')
-    try:
+    with running_node('-p', 'use_sim_time:=true'):
         probe = Probe()
         clock = probe.create_publisher(Clock, '/clock', 10)
         sim_ns = [1000 * 10**9]
@@ -42,28 +40,13 @@ def test_sim_time_stamps_follow_the_clock_topic():
         assert np.all(stamps >= 1000 * 10**9) and np.all(stamps <= sim_ns[0])
         assert np.all(np.diff(stamps) > 0)
         probe.destroy_node()
-    finally:
-        rclpy.shutdown()
-        code = node.stop()
-        output = node.output()
-        node.close()
-    assert code == 0, output
 
 
 def test_sigterm_ends_cleanly():
-    rclpy.init()
-    node = NodeProcess()
-    try:
+    with running_node(sig=signal.SIGTERM):
         probe = Probe()
         probe.wait_ready()
         probe.destroy_node()
-    finally:
-        rclpy.shutdown()
-        code = node.stop(signal.SIGTERM)
-        output = node.output()
-        node.close()
-    assert code == 0, output
-    assert 'Traceback' not in output, output
 
 
 @pytest.mark.parametrize('override, reason', [

@@ -59,9 +59,10 @@ BAD_REQUESTS = {
     'first point at t=0 elsewhere': (
         via_message(['joint_4'], [([1.0], 0.0), ([1.1], 1.0)]),
         "point 0 has time_from_start 0 but joint 'joint_4' is at"),
-    'velocity limit': (via_message(['joint_2'], [([3.0], 1.0)]),
-                       r"joint 'joint_2' would reach velocity .* above max_velocity 2 rad/s.*"
-                       r'the minimum feasible duration is'),
+    # The largest excess is named: here acceleration (x4.3) before velocity (x2.25).
+    'limit': (via_message(['joint_2'], [([3.0], 1.0)]),
+              r"joint 'joint_2' would reach acceleration .* above max_acceleration 4 rad/s\^2"
+              r'.*the minimum feasible duration is'),
 }
 
 
@@ -145,3 +146,15 @@ def test_parameters_change_at_run_time(probe):
         probe.require_parameters(rate_hz=100.0, profile='quintic', max_velocity=[
             2.0, 2.0, 2.0, 3.0, 3.0, 3.0], lspb_acceleration=0.0)
     assert list(probe.latest().name) == JOINTS
+
+
+def test_malformed_via_points_bytes_are_refused_and_the_node_goes_on(probe):
+    start = probe.wait_at_rest()
+    count = len(probe.statuses)
+    probe.via_pub.publish(b'\x00\x01\x00\x00' + b'\xff' * 21)  # not a JointTrajectory
+    probe.spin_until(lambda: len(probe.statuses) > count, 10.0, 'an answer')
+    status = probe.statuses[count]
+    assert status.level == DiagnosticStatus.ERROR and 'via_points refused' in status.message
+    ok, _ = probe.goal({'joint_3': start[2] + 0.1})
+    assert ok.level == DiagnosticStatus.OK, ok.message
+    assert probe.wait_at_rest()[2] == pytest.approx(start[2] + 0.1, abs=1e-12)

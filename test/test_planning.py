@@ -6,25 +6,27 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 import numpy as np
 import pytest
+from rclpy.serialization import serialize_message
 from traj_gen_ros import min_time
-from traj_gen_ros.planning import (
-    GoalRequest,
-    Hold,
-    make_config,
-    parse_goal,
-    parse_via,
-    plan_goal,
+from traj_gen_ros.motion_planning import (
+    held,
+    plan_request,
     plan_stop,
-    plan_via,
-    PlannedMotion,
-    RequestError,
     sample_grid,
     sample_motion,
-    Schedule,
-    split_nanoseconds,
     State,
     via_points,
 )
+from traj_gen_ros.node_config import make_config
+from traj_gen_ros.request_parsing import (
+    GoalRequest,
+    parse_goal,
+    parse_via,
+    peek_via_points,
+    RequestError,
+)
+from traj_gen_ros.schedule import Schedule
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 JOINTS = ['a', 'b', 'c']
 
@@ -97,7 +99,7 @@ def test_via_points_rules():
 def test_goal_plan_matches_core_min_time_and_holds_unnamed_joints():
     cfg = config()
     request = GoalRequest(np.array([0]), np.array([1.0]))
-    motion = plan_goal(cfg, rest(), np.array([0.0, 0.5, 0.0]), request)
+    motion = plan_request(cfg, rest(), np.array([0.0, 0.5, 0.0]), request)
     expected = min_time([0, 0, 0], [1.0, 0.5, 0.0], cfg.max_velocity, cfg.max_acceleration,
                         profile='quintic')
     assert motion.plan.duration == pytest.approx(expected.duration)
@@ -111,7 +113,7 @@ def test_explicit_times_too_short_report_a_feasible_minimum():
     cfg = config(profile='cubic')
     request = parse_via(JOINTS, ['a'], [([1.0], [], [], 0.5)])
     with pytest.raises(RequestError, match='minimum feasible duration is ([0-9.]+) s') as info:
-        plan_via(cfg, rest(), np.zeros(3), request)
+        plan_request(cfg, rest(), np.zeros(3), request)
     minimum = float(str(info.value).split('duration is ')[1].split(' s')[0])
     # cubic rest to rest: peak velocity 1.5 h / T binds (1 rad/s): T = 1.5 s.
     assert minimum == pytest.approx(1.5, rel=1e-3)
@@ -121,7 +123,7 @@ def test_auto_timing_stretches_when_the_start_state_needs_it():
     cfg = config()
     moving = State(np.zeros(3), np.array([0.9, 0, 0]), np.zeros(3))
     request = parse_via(JOINTS, ['a'], [([-0.05], [], [], 0.0)])
-    motion = plan_via(cfg, moving, np.zeros(3), request)
+    motion = plan_request(cfg, moving, np.zeros(3), request)
     _, v, a = motion.plan.sample(np.linspace(0, motion.plan.duration, 2001))
     assert np.all(np.abs(v) <= cfg.max_velocity * (1 + 1e-6))
     assert np.all(np.abs(a) <= cfg.max_acceleration * (1 + 1e-6))
@@ -138,13 +140,28 @@ def test_stop_brakes_at_the_limit_to_rest():
     assert np.all(np.abs(a) <= 4.0) and not v[-1].any()
 
 
-def test_sample_grid_and_nanoseconds():
-    times = sample_grid(Hold([0.0]), 100.0)
+def test_sample_grid():
+    times = sample_grid(held([0.0]).plan, 100.0)
     assert times.tolist() == [0.0]
     plan = min_time(0.0, 0.3, 1.0, 4.0, profile='quintic')
     times = sample_grid(plan, 100.0)
     assert times[-1] == plan.duration and np.allclose(np.diff(times)[:-1], 0.01)
-    assert split_nanoseconds(np.array([1.25, 0.01])) == ([1, 0], [250_000_000, 10_000_000])
+
+
+def test_peek_via_points_reads_frame_id_and_count_off_the_wire():
+    message = JointTrajectory(joint_names=['a', 'bb', 'ccc'],
+                              points=[JointTrajectoryPoint(positions=[1.0])] * 7)
+    message.header.frame_id = 'tag-17'
+    data = serialize_message(message)
+    assert peek_via_points(data) == ('tag-17', 7)
+    assert peek_via_points(data[:12]) == ('', 0)  # truncated: deserialising refuses it
+
+
+def test_limit_refusals_name_joints_by_their_ros_names():
+    cfg = config(profile='cubic')
+    request = parse_via(JOINTS, ['b'], [([1.0], [], [], 0.1)])
+    with pytest.raises(RequestError, match="joint 'b' would reach"):
+        plan_request(cfg, rest(), np.zeros(3), request)
 
 
 @settings(max_examples=40, deadline=None)
@@ -153,7 +170,7 @@ def test_sample_grid_and_nanoseconds():
                 min_size=1, max_size=4))
 def test_preemption_keeps_position_and_velocity_continuous(requests):
     """Accepted replans start at the setpoint; a refusal is a RequestError, never a crash."""
-    schedule = Schedule(PlannedMotion(Hold(np.zeros(3)), 'hold', np.zeros(3)))
+    schedule = Schedule(held(np.zeros(3)))
     now = 0
     last = np.zeros(3)
     for number, (delay, target, profile) in enumerate(requests):
@@ -162,8 +179,8 @@ def test_preemption_keeps_position_and_velocity_continuous(requests):
         cfg = config(profile=profile)
         state = schedule.state_at(now)
         try:
-            motion = plan_goal(cfg, state, schedule.end_position(now),
-                               GoalRequest(np.array([0, 2]), np.array([target, -target])))
+            motion = plan_request(cfg, state, schedule.end_position(now),
+                                  GoalRequest(np.array([0, 2]), np.array([target, -target])))
         except RequestError as error:
             assert number > 0, error  # from rest every goal is feasible
             assert 'from the current motion' in str(error)

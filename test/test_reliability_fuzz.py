@@ -32,7 +32,10 @@ from reliability_cases import (
     refusal_ok,
 )
 from sensor_msgs.msg import JointState
-from traj_gen_ros import planning
+from traj_gen_ros.motion_planning import held, plan_request, sample_motion
+from traj_gen_ros.node_config import make_config
+from traj_gen_ros.request_parsing import parse_goal, parse_via, RequestError
+from traj_gen_ros.schedule import Schedule
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 CASES = int(os.environ.get('FUZZ_CASES', '2000'))
@@ -53,7 +56,7 @@ def check_plan(case, motion, state, hold, profile, a_limit, rate):
     """Judge an accepted plan: finite, starts at the state, ends at rest, limits, range."""
     plan = motion.plan
     duration = plan.duration
-    times = np.unique(np.concatenate([planning.sample_motion(motion, rate)[0],
+    times = np.unique(np.concatenate([sample_motion(motion, rate)[0],
                                       np.linspace(0.0, duration, 401)]))
     q, v, a = plan.sample(times)
     assert np.isfinite(q).all() and np.isfinite(v).all() and np.isfinite(a).all()
@@ -80,13 +83,12 @@ def check_plan(case, motion, state, hold, profile, a_limit, rate):
 def run_planning_cases(count: int, seed: int) -> dict:
     """Run ``count`` cases through planning as the node does; return the figures."""
     rng = np.random.default_rng(seed)
-    start = planning.PlannedMotion(planning.Hold(np.zeros(6)), 'hold', np.zeros(6))
-    schedule = planning.Schedule(start)
+    schedule = Schedule(held(np.zeros(6)))
     now = 0
     figures = Counter()
     categories = Counter()
     for number in range(count):
-        config = planning.make_config(
+        config = make_config(
             JOINTS, float(rng.choice([100.0, 250.0, 500.0])), str(rng.choice(PROFILES)),
             str(rng.choice(['heuristic', 'continuous'])), MAX_VELOCITY, MAX_ACCELERATION,
             float(rng.choice([0.0, 3.0])))
@@ -97,12 +99,12 @@ def run_planning_cases(count: int, seed: int) -> dict:
         label = f'case {number} ({case.category}, {case.kind}, {config.profile})'
         try:
             if case.kind == 'goal':
-                request = planning.parse_goal(JOINTS, case.names, case.positions)
-                motion = planning.plan_goal(config, state, hold, request)
+                request = parse_goal(JOINTS, case.names, case.positions)
+                motion = plan_request(config, state, hold, request)
             else:
-                request = planning.parse_via(JOINTS, case.names, case.points)
-                motion = planning.plan_via(config, state, hold, request)
-        except planning.RequestError as error:
+                request = parse_via(JOINTS, case.names, case.points)
+                motion = plan_request(config, state, hold, request)
+        except RequestError as error:
             assert refusal_ok(case, str(error)), f'{label}: unexpected refusal: {error}'
             figures['refused'] += 1
             categories[f'{case.category}: refused'] += 1

@@ -2,7 +2,6 @@
 
 from pathlib import Path
 import signal
-import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from node_harness import JOINTS, NodeProcess, Probe
@@ -22,14 +21,6 @@ def children(pid: int) -> list[int]:
             if int(stat.rsplit(')', 1)[1].split()[1]) == pid:
                 found.append(int(entry.name))
     return found
-
-
-def alive(pid: int) -> bool:
-    """Whether ``pid`` runs (a zombie waiting to be reaped does not count)."""
-    try:
-        return (Path(f'/proc/{pid}') / 'stat').read_text().rsplit(')', 1)[1].split()[0] != 'Z'
-    except OSError:
-        return False
 
 
 @pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
@@ -58,10 +49,7 @@ def test_shutdown_mid_motion_is_clean_and_a_restart_holds_the_initial_positions(
                 node.close()
             assert code == 0, output
             assert 'Traceback' not in output, output
-            assert workers, 'no planning worker process'
-            deadline = time.monotonic() + 5.0
-            while any(alive(pid) for pid in workers) and time.monotonic() < deadline:
-                time.sleep(0.05)
-            assert not any(alive(pid) for pid in workers), 'a worker outlived the node'
+            # The node plans in its own process (issue 11): nothing to orphan.
+            assert workers == [], f'the node started child processes {workers}'
     finally:
         rclpy.shutdown()

@@ -27,12 +27,13 @@ import re
 import sys
 
 import numpy as np
-
-EXIT_OK = 0
-EXIT_REFUSED = 1
-EXIT_USAGE = 2
-EXIT_NO_ANSWER = 3
-EXIT_INTERNAL = 4
+from traj_gen_ros.cli_args import (  # shared with cli_ros, which must not import this module
+    EXIT_INTERNAL,
+    EXIT_OK,
+    EXIT_USAGE,
+    report_plot,
+    UsageError,
+)
 
 PROG = 'traj-gen'
 # What requirements.txt pins; named in the error when matplotlib is missing.
@@ -75,14 +76,6 @@ examples:
   traj-gen via --joints joint_1 --degrees --point 35 @2 --point 25 @3 --point 10 @6 --wait
   traj-gen via --joints joint_1 joint_2 --point 0.5 0.3 --point 1 -0.2   (timed by the node)
 """
-
-
-class UsageError(Exception):
-    """Bad arguments or a plan the solver refuses: one line on stderr, exit status 2."""
-
-    def __init__(self, message: str, prog: str | None = None) -> None:
-        super().__init__(message)
-        self.prog = prog
 
 
 class _Parser(argparse.ArgumentParser):
@@ -580,15 +573,6 @@ def run_plot(args: argparse.Namespace) -> int:
 def _plot_title(plan: Plan) -> str:
     points = ' → '.join(','.join(f'{value:g}' for value in point) for point in plan.points)
     return f'{plan.profile}: {points} {plan.unit} in {plan.trajectory.duration:.3g} s'
-
-
-def report_plot(info: dict, as_json: bool) -> None:
-    """Print where the PNG went (and its size and panels with ``--json``)."""
-    if as_json:
-        print(json.dumps(info, indent=2, ensure_ascii=False))
-    else:
-        print(f"wrote {info['output']} ({info['width']}x{info['height']} px, "
-              f"{len(info['panels'])} panels)")
 
 
 def run_ros(args: argparse.Namespace) -> int:

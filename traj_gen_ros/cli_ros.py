@@ -1,8 +1,8 @@
 """
 ROS side of ``traj-gen``: send goals and via points to a running generator, record its plans.
 
-rclpy and the message packages are imported only inside these functions, so the offline
-subcommands (and importing :mod:`traj_gen_ros.cli`) need no ROS at all.
+:mod:`traj_gen_ros.cli` imports this module only when one of these commands runs, so the
+offline subcommands need no ROS at all.
 
 A status answers a request when it comes from the node (``name`` is its full name) after
 the request was published, its ``request`` value names the request's kind (``goal`` or
@@ -24,14 +24,21 @@ import secrets
 import sys
 import time
 
+from builtin_interfaces.msg import Duration
+from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
-from traj_gen_ros.cli import (
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from traj_gen_ros.cli_args import (
     EXIT_NO_ANSWER,
     EXIT_OK,
     EXIT_REFUSED,
     report_plot,
     UsageError,
 )
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 _AT_GOAL = 1e-6  # rad: the motion has ended when the named joints are this close, at rest
 _LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
@@ -106,9 +113,6 @@ class _Session:
     """An rclpy context, node and executor for one command."""
 
     def __init__(self) -> None:
-        import rclpy
-        from rclpy.executors import SingleThreadedExecutor
-
         self.context = rclpy.Context()
         rclpy.init(args=['traj-gen'], context=self.context)
         self.node = rclpy.create_node(f'traj_gen_cli_{os.getpid()}', context=self.context,
@@ -143,8 +147,6 @@ def _session() -> Iterator[_Session]:
 
 
 def _reliable(depth: int, transient_local: bool = False) -> object:
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-
     durability = (DurabilityPolicy.TRANSIENT_LOCAL if transient_local
                   else DurabilityPolicy.VOLATILE)
     return QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE,
@@ -163,15 +165,10 @@ def _request_message(args: argparse.Namespace) -> tuple[object, str, list[str], 
     """Build the request; return it, its kind, the named joints and their final targets."""
     token = f'traj-gen/{os.getpid()}/{secrets.token_hex(4)}'
     if args.command == 'goal':
-        from sensor_msgs.msg import JointState
-
         names, positions = parse_goal(args.positions, args.degrees)
         message = JointState(name=names, position=positions)
         message.header.frame_id = token
         return message, 'goal', names, positions
-    from builtin_interfaces.msg import Duration
-    from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
-
     points = parse_via(args.joints, args.points, args.degrees)
     message = JointTrajectory(joint_names=list(args.joints))
     message.header.frame_id = token
@@ -190,9 +187,6 @@ def run_request(args: argparse.Namespace) -> int:
     if args.timeout <= 0:
         raise UsageError('--timeout must be > 0 s')
     message, kind, names, targets = _request_message(args)
-    from diagnostic_msgs.msg import DiagnosticStatus
-    from sensor_msgs.msg import JointState
-
     try:
         with _session() as session:
             ros = session.node
@@ -260,8 +254,7 @@ def _wait_for_end(session: _Session, states: list, status: dict, names: list[str
 
 def run_plot_topic(args: argparse.Namespace) -> int:
     """``traj-gen plot --topic``: plot one JointTrajectory (transient local) from a topic."""
-    from traj_gen_ros import plotting
-    from trajectory_msgs.msg import JointTrajectory
+    from traj_gen_ros import plotting  # matplotlib: loaded only when a plot is made
 
     if args.timeout <= 0:
         raise UsageError('--timeout must be > 0 s')

@@ -1,0 +1,236 @@
+"""
+A request from its callback to the stream: parse → validate → plan → sample → splice.
+
+The callbacks run on the executor thread. Each takes the request that woke it and every
+request waiting behind it (a burst is drained in one callback: only the newest can run),
+parses each (:mod:`traj_gen_ros.request_parsing`; a malformed one is refused at once),
+answers the older valid ones "superseded", and executes the newest right away:
+
+1. the start is the stream's next tick not yet published (or the request's future
+   ``header.stamp``), and the start state is the schedule's setpoint there;
+2. plan from that state (:mod:`traj_gen_ros.motion_planning`), refusing with a reason;
+3. splice it into the schedule at the start: the stream samples it there and publishes its
+   first setpoint at that tick (:mod:`traj_gen_ros.stream`);
+4. sample the plan for ``~/trajectory`` and publish it, then the OK status once the stream
+   has published the first setpoint of the new motion (a client reading the answer sees
+   it started; a delayed start is answered at once) (:mod:`traj_gen_ros.answers`).
+
+Sampling comes after the splice so that it does not delay the start: a plan that reaches
+the splice has finite coefficients and finite, checked peaks, so its samples are finite.
+
+The start tick is the first one at least the last request's planning time away (so the
+plan is ready by then). If the stream published the start tick while the request was
+being planned anyway (a long path, a loaded machine), the request is planned again from a
+later tick, at most ``PLAN_ATTEMPTS`` times, then refused.
+"""
+
+from __future__ import annotations
+
+import collections
+from collections.abc import Callable
+import statistics
+import time
+
+from builtin_interfaces.msg import Duration
+import numpy as np
+from rclpy.serialization import deserialize_message
+from rclpy.subscription import Subscription
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from traj_gen_ros.answers import Answers, Request
+from traj_gen_ros.motion_planning import (
+    plan_request,
+    plan_stop,
+    PlannedMotion,
+    State,
+)
+from traj_gen_ros.node_config import Config
+from traj_gen_ros.request_parsing import (
+    MAX_VIA_POINTS,
+    parse_goal,
+    parse_via,
+    peek_via_points,
+    RequestError,
+    too_many_points,
+)
+from traj_gen_ros.stream import Stream
+from trajectory_msgs.msg import JointTrajectory
+
+#: Depth of the request subscriptions: a burst while the executor is busy is kept.
+REQUEST_DEPTH = 1000
+#: Rounds of request callbacks closer than this (s) are spaced out to it: under a flood
+#: the next round then drains a batch at once, so the executor thread holds the GIL less
+#: and the stream keeps its rate. A request after a quiet spell is not delayed.
+REQUEST_ROUND_PERIOD = 0.005
+#: A new motion starts at the first tick at least the median planning and sampling time
+#: of the last RECENT requests away, so that it is ready by then (a few hundred us: most
+#: often the very next tick). One whose start tick the stream passed while it was planned
+#: anyway is planned again from a later tick (twice the time it took, at most
+#: MAX_MARGIN_NS away), at most PLAN_ATTEMPTS times in all.
+RECENT = 5
+MAX_MARGIN_NS = 500_000_000
+PLAN_ATTEMPTS = 3
+#: The OK status waits at most this long (s) for the motion's first setpoint.
+ANSWER_WAIT = 0.1
+
+#: Plans a motion for ``(config, start state, where unnamed joints rest)``.
+Planner = Callable[[Config, State, np.ndarray], PlannedMotion]
+
+
+def _seconds(duration: Duration) -> float:
+    return duration.sec + duration.nanosec * 1e-9
+
+
+class RequestHandler:
+    """Take requests off the subscriptions, plan the newest, splice it into the stream."""
+
+    def __init__(self, config: Callable[[], Config], stream: Stream, answers: Answers,
+                 now_ns: Callable[[], int], log_error: Callable[[str], None]) -> None:
+        """Handle requests with the current ``config()``, on the node clock ``now_ns()``."""
+        self._config = config
+        self._stream = stream
+        self._answers = answers
+        self._now_ns = now_ns
+        self._log_error = log_error
+        self._last_round = 0.0  # time.monotonic() at the end of the last request callback
+        # How long the last requests took to plan and sample (ns).
+        self._recent_ns: collections.deque[int] = collections.deque([0], maxlen=RECENT)
+
+    # ------------------------------------------------------------------ take and parse
+
+    def take(self, subscription: Subscription, message_type: type, raw: bool,
+             first: object) -> None:
+        """Parse ``first`` and every request waiting behind it; execute the newest valid one."""
+        parse = self._parse_via if raw else self._parse_goal
+        try:
+            parsed = [parse(first)]
+            with subscription.handle:
+                for _ in range(REQUEST_DEPTH):
+                    taken = subscription.handle.take_message(message_type, raw)
+                    if taken is None:
+                        break
+                    parsed.append(parse(taken[0]))
+            parsed = [request for request in parsed if request is not None]
+            if parsed:
+                self._answers.superseded(parsed[:-1])
+                newest = parsed[-1]
+                self.execute(newest, lambda config, state, hold_at: plan_request(
+                    config, state, hold_at, newest.request))
+        finally:
+            self._pace()
+
+    def _pace(self) -> None:
+        """End a request callback no sooner than ``REQUEST_ROUND_PERIOD`` after the last one."""
+        rest = self._last_round + REQUEST_ROUND_PERIOD - time.monotonic()
+        if rest > 0.0:
+            time.sleep(rest)
+        self._last_round = time.monotonic()
+
+    def _parse_goal(self, message: JointState) -> Request | None:
+        request = Request('goal', self._answers.values('goal', message.header.frame_id), 0,
+                          None)
+        try:
+            request.request = parse_goal(self._config().joints, message.name, message.position)
+        except RequestError as error:
+            self._answers.refused(request, str(error))
+            return None
+        return request
+
+    def _parse_via(self, data: bytes) -> Request | None:
+        frame_id, count = peek_via_points(data)
+        if count > MAX_VIA_POINTS:  # refused before one Python object per point is made
+            request = Request('via_points', self._answers.values('via_points', frame_id), 0,
+                              None)
+            self._answers.refused(request, too_many_points(count))
+            return None
+        try:
+            message = deserialize_message(data, JointTrajectory)
+        except Exception as error:  # noqa: BLE001 - bytes from the wire must never kill the node
+            request = Request('via_points', self._answers.values('via_points', frame_id), 0,
+                              None)
+            self._answers.refused(request, f'malformed message: {error}')
+            return None
+        stamp = message.header.stamp
+        stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # 0 or past: "now"
+        request = Request('via_points', self._answers.values(
+            'via_points', message.header.frame_id), stamp_ns, None)
+        points = [(p.positions, p.velocities, p.accelerations, _seconds(p.time_from_start))
+                  for p in message.points]
+        try:
+            request.request = parse_via(self._config().joints, message.joint_names, points)
+        except RequestError as error:
+            self._answers.refused(request, str(error))
+            return None
+        return request
+
+    # ------------------------------------------------------------------ plan and splice
+
+    def execute(self, request: Request, plan: Planner) -> PlannedMotion | None:
+        """
+        Plan ``request`` from the stream's next tick, splice it in, sample it, answer it.
+
+        Returns the motion spliced in, or ``None`` when it was refused (answered ERROR).
+        """
+        config = self._config()
+        placed = self._plan_and_splice(request, plan, config)
+        if placed is None:
+            return None
+        motion, now_ns, start_ns = placed
+        try:
+            message = self._answers.trajectory(start_ns, motion, config.rate_hz)
+        except Exception as error:  # noqa: BLE001 - checked plans are finite: a bug if not
+            self._log_error(f'sampling an accepted {request.kind} failed: {error!r}; braking')
+            self._brake(config)
+            self._answers.refused(request, f'internal error: {error}')
+            return None
+        self._answers.publish_trajectory(message)
+        if start_ns - now_ns <= ANSWER_WAIT * 1e9:
+            self._stream.wait_published(start_ns, ANSWER_WAIT)
+        self._answers.accepted(request, motion, now_ns, start_ns)
+        return motion
+
+    def _plan_and_splice(self, request: Request, plan: Planner, config: Config
+                         ) -> tuple[PlannedMotion, int, int] | None:
+        """Return the motion spliced in, the time it was planned and its start (ns)."""
+        margin_ns = int(statistics.median(self._recent_ns))
+        for _ in range(PLAN_ATTEMPTS):
+            began = time.perf_counter_ns()
+            now_ns = self._now_ns()
+            start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
+            state, hold_at = self._stream.state_at(start_ns)
+            try:
+                motion = plan(config, state, hold_at)
+            except RequestError as error:
+                self._answers.refused(request, str(error))
+                return None
+            except Exception as error:  # noqa: BLE001 - a bad request must never kill the node
+                self._log_error(f'unexpected failure planning {request.kind}: {error!r}')
+                self._answers.refused(request, f'internal error: {error}')
+                return None
+            elapsed_ns = time.perf_counter_ns() - began
+            if self._stream.splice(start_ns, motion):
+                self._recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
+                return motion, now_ns, start_ns
+            margin_ns = min(2 * elapsed_ns, MAX_MARGIN_NS)
+        self._answers.refused(request, f'the stream passed its start {PLAN_ATTEMPTS} times '
+                              f'while it was planned (last margin {margin_ns * 1e-9:.3f} s); '
+                              'resend it')
+        return None
+
+    def _brake(self, config: Config) -> None:
+        """Brake from the next tick (after a failure nothing should cause)."""
+        start_ns = self._stream.next_start()
+        state, _ = self._stream.state_at(start_ns)
+        try:
+            self._stream.splice(start_ns, plan_stop(config, state))
+        except ValueError as error:  # a non-finite state: the stream holds its last setpoint
+            self._log_error(f'braking failed: {error!r}')
+
+    def stop(self, response: Trigger.Response) -> Trigger.Response:
+        """``~/stop``: brake within ``max_acceleration`` from the next tick, then hold."""
+        request = Request('stop', self._answers.values('stop', ''), 0, None)
+        motion = self.execute(request, lambda config, state, _: plan_stop(config, state))
+        response.success = motion is not None
+        response.message = ('stopping: at rest in '
+                            f'{motion.plan.duration:.3f} s' if motion else 'stop failed')
+        return response
