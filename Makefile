@@ -8,16 +8,23 @@ export PYTHONPATH := $(CURDIR)
 
 .PHONY: run test lint bench fuzz demo clean
 
-$(STAMP): requirements.txt requirements-dev.txt
+# The venv gets the pinned requirements, then this package itself, editable: its console
+# scripts .venv/bin/generator and .venv/bin/traj-gen run the working copy. PEP 660 (the
+# wheel is built in a temporary directory) writes no build/ or *.egg-info into the tree,
+# and pip installs the scripts in .venv/bin; setup.cfg's lib/traj_gen_ros script
+# directory is for colcon and `ros2 run`. setup.py and setup.cfg declare the scripts.
+$(STAMP): requirements.txt requirements-dev.txt setup.py setup.cfg
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --disable-pip-version-check -r requirements-dev.txt
+	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation \
+		--use-pep517 --editable .
 	touch $(STAMP)
 
 run: $(STAMP)
-	$(PY) -m traj_gen_ros.generator_node --ros-args --params-file config/generator.yaml
+	$(VENV)/bin/generator --ros-args --params-file config/generator.yaml
 
 lint: $(STAMP)
-	$(PY) -m ruff check traj_gen_ros test benchmarks
+	$(PY) -m ruff check traj_gen_ros test benchmarks launch
 
 test: $(STAMP) lint
 	$(PY) -m pytest -q test
@@ -25,8 +32,7 @@ test: $(STAMP) lint
 bench: $(STAMP)
 	$(PY) benchmarks/run.py
 
-# The lecture's examples offline and through a running node; plots in out/ (traj-gen is
-# `$(PY) -m traj_gen_ros.cli` here, `traj-gen` once the package is installed).
+# The lecture's examples offline and through a running node; plots in out/.
 # Reliability fuzz (issue 5): 20,000 generated requests through the planning layer and
 # 3,000 against the live node over DDS, for seeds FUZZ_SEEDS; then the flood benchmark.
 # Figures: out/reliability_fuzz.json (last seed), out/reliability_flood.json.

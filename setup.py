@@ -14,8 +14,10 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', glob('config/*.yaml')),
+        ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
     ],
-    install_requires=['setuptools', 'numpy'],
+    # What requirements.txt pins, unpinned: the ROS packages come from the ROS install.
+    install_requires=['setuptools', 'numpy', 'matplotlib', 'urdfdom-py'],
     zip_safe=True,
     maintainer='traj_gen_ros maintainers',
     maintainer_email='maintainers@traj-gen-ros.org',

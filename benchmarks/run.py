@@ -74,6 +74,44 @@ def planning() -> None:
     print(f'   (both compute the same time-optimal motion: {ours.duration:.4f} s)')
 
 
+def moving_state() -> None:
+    print('== planning from a moving state (issue 10): 6 and 1000 joints, µs per plan')
+    rng = np.random.default_rng(11)
+    for joints, target_us in ((JOINTS, {'lspb': 100.0, 'cubic': 300.0, 'quintic': 300.0}),
+                              (1000, {'lspb': 2000.0, 'cubic': 2000.0, 'quintic': 2000.0})):
+        start = rng.uniform(-1.0, 1.0, joints)
+        goal = rng.uniform(-1.0, 1.0, joints)
+        max_velocity = rng.uniform(0.5, 2.0, joints)
+        max_acceleration = rng.uniform(1.0, 4.0, joints)
+        # Replanning on the way: moving towards the goal at up to half the velocity limit
+        # (a quintic cannot turn a joint that speeds away from its goal at once).
+        towards = np.sign(goal - start)
+        velocity = towards * rng.uniform(0.0, 0.5, joints) * max_velocity
+        acceleration = towards * rng.uniform(-0.2, 0.2, joints) * max_acceleration
+        planner = ruckig.Ruckig(joints)
+        request = ruckig.InputParameter(joints)
+        request.current_position, request.target_position = start.tolist(), goal.tolist()
+        request.current_velocity = velocity.tolist()
+        request.max_velocity = max_velocity.tolist()
+        request.max_acceleration = max_acceleration.tolist()
+        request.max_jerk = [float('inf')] * joints
+        trajectory = ruckig.Trajectory(joints)
+        planner.calculate(request, trajectory)
+        ruckig_us = seconds_per_call(lambda p=planner, r=request, t=trajectory:
+                                     p.calculate(r, t)) * 1e6
+        for profile, target in target_us.items():
+            state = (start, goal, max_velocity, max_acceleration, profile)
+
+            def plan(state=state, velocity=velocity, acceleration=acceleration):
+                return tg.min_time(*state, v0=velocity, a0=acceleration)
+            if profile == 'lspb':
+                assert abs(plan().duration - trajectory.duration) <= 1e-9 * trajectory.duration
+            us = seconds_per_call(plan, budget=0.5) * 1e6
+            verdict = 'met' if us <= target else 'MISSED'
+            report(f'{joints} joints min_time {profile} from v0, a0', us, 'ruckig', ruckig_us,
+                   'µs', f'<= {target:g} µs ({verdict})')
+
+
 def via_spline() -> None:
     print('== 6-joint, 20-via-point "continuous" cubic: plan + sample pos/vel/acc at 1 kHz')
     rng = np.random.default_rng(7)
@@ -141,6 +179,7 @@ def node_latency() -> None:
 
 if __name__ == '__main__':
     planning()
+    moving_state()
     via_spline()
     sampling()
     node_latency()

@@ -5,13 +5,14 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=${PY:-.venv/bin/python}
+BIN=$(dirname "$PY")  # the console scripts `make` installs beside it: traj-gen, generator
 OUT=${OUT:-out}
 export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}"
 export ROS_DOMAIN_ID=${DEMO_DOMAIN_ID:-$((1 + $$ % 100))}
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
 unset ROS_LOCALHOST_ONLY
 mkdir -p "$OUT"
-traj_gen() { echo "\$ traj-gen $*"; "$PY" -m traj_gen_ros.cli "$@"; }
+traj_gen() { echo "\$ traj-gen $*"; "$BIN/traj-gen" "$@"; }
 
 echo '== Offline (core solver only): the 15° → 75° cubic in 3 s, and LSPB through via points'
 traj_gen solve cubic --points 15 75 --duration 3 --degrees
@@ -23,7 +24,7 @@ traj_gen plot lspb --points 10 35 25 10 --durations 2 1 3 --acceleration 50 --de
 node_pid=
 start_node() {
   echo "== generator node ($*), ROS_DOMAIN_ID=$ROS_DOMAIN_ID, log in $OUT/node.log"
-  "$PY" -m traj_gen_ros.generator_node --ros-args --params-file config/generator.yaml \
+  "$BIN/generator" --ros-args --params-file config/generator.yaml \
     "$@" >>"$OUT/node.log" 2>&1 &
   node_pid=$!
 }

@@ -10,6 +10,7 @@ import sys
 import matplotlib.image as mpimg
 import numpy as np
 import pytest
+from traj_gen_ros.cli import MATPLOTLIB_REQUIREMENT
 
 REPO = Path(__file__).resolve().parents[1]
 TIMEOUT = 120  # s per command: generous, the machine is shared
@@ -41,7 +42,7 @@ def env() -> dict:
 
 
 def traj_gen(*args: str) -> subprocess.CompletedProcess:
-    """Run `traj-gen ARGS` the way the README does: python -m traj_gen_ros.cli."""
+    """Run `traj-gen ARGS` from the work tree (test_install.py runs the installed script)."""
     return subprocess.run([sys.executable, '-m', 'traj_gen_ros.cli', *args], cwd=REPO,
                           env=env(), capture_output=True, text=True, timeout=TIMEOUT)
 
@@ -206,6 +207,30 @@ def test_plot_shades_lspb_blends(tmp_path):
 def test_bad_arguments_give_one_line_and_exit_2(args):
     line = assert_one_line_error(traj_gen(*args))
     assert line.startswith('traj-gen'), line
+
+
+@pytest.mark.parametrize('args', [
+    ['plot', *CUBIC_ARGS, '-o', 'never.png'],
+    ['plot', '--topic', '/trajectory_generator/trajectory', '-o', 'never.png', '--timeout', '30'],
+], ids=['plan', 'topic'])
+def test_plot_without_matplotlib_says_what_to_install_and_exits_2(tmp_path, args):
+    # `import matplotlib` fails as in an environment without it (None in sys.modules).
+    script = ('import sys\n'
+              "sys.modules['matplotlib'] = None\n"
+              'from traj_gen_ros.cli import main\n'
+              'sys.exit(main(sys.argv[1:]))\n')
+    result = subprocess.run([sys.executable, '-c', script, *args], cwd=tmp_path, env=env(),
+                            capture_output=True, text=True, timeout=TIMEOUT)
+    line = assert_one_line_error(result, code=2)
+    assert line.startswith('traj-gen plot: error: plot needs matplotlib'), line
+    assert 'pip install matplotlib==3.11.2' in line and 'python3-matplotlib' in line, line
+    assert 'internal error' not in line
+    assert not (tmp_path / 'never.png').exists()
+
+
+def test_the_matplotlib_named_in_that_error_is_the_pinned_one():
+    pins = (REPO / 'requirements.txt').read_text().split()
+    assert MATPLOTLIB_REQUIREMENT in pins
 
 
 def test_solver_refusal_names_the_fix():

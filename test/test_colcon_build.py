@@ -44,6 +44,8 @@ def test_colcon_build_installs_a_runnable_ament_python_package(tmp_path):
     assert package.get_build_type() == 'ament_python'
     config = prefix / 'share' / 'traj_gen_ros' / 'config' / 'generator.yaml'
     assert config.is_file()
+    launch_file = prefix / 'share' / 'traj_gen_ros' / 'launch' / 'generator.launch.py'
+    assert launch_file.read_text() == (REPO / 'launch' / 'generator.launch.py').read_text()
     assert not (REPO / 'build').exists() and not list(REPO.glob('*.egg-info'))
 
     # The command-line tool is installed beside the node and runs from the install space.

@@ -6,7 +6,8 @@ from ament_flake8.main import main_with_errors
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-PATHS = [REPO / 'traj_gen_ros', REPO / 'test', REPO / 'benchmarks', REPO / 'setup.py']
+PATHS = [REPO / 'traj_gen_ros', REPO / 'test', REPO / 'benchmarks', REPO / 'launch',
+         REPO / 'setup.py']
 
 
 @pytest.mark.flake8

@@ -11,5 +11,5 @@ REPO = Path(__file__).resolve().parents[1]
 @pytest.mark.linter
 @pytest.mark.pep257
 def test_pep257():
-    rc = main(argv=[str(REPO / 'traj_gen_ros'), str(REPO / 'test')])
+    rc = main(argv=[str(REPO / 'traj_gen_ros'), str(REPO / 'test'), str(REPO / 'launch')])
     assert rc == 0, 'Found code style errors / warnings'

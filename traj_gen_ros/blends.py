@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from traj_gen_ros import validation
+from traj_gen_ros import second_order, validation
 from traj_gen_ros.limits import JointError
 from traj_gen_ros.trajectory import Trajectory
 from traj_gen_ros.validation import ArrayLike
@@ -68,13 +68,20 @@ def lspb(
     joint) raises ``ValueError`` naming the joint and that minimum.
 
     ``v0`` (rad/s, an extension for replanning a moving joint) starts the first blend at
-    that velocity: the cruise velocity is then found numerically (the displacement grows
-    monotonically with it) and both blends use ``acceleration``.
+    that velocity; both blends then use ``acceleration`` and the cruise velocity is the
+    closed-form root of :func:`traj_gen_ros.second_order.cruise_velocity`. A duration too
+    short for the move raises ``ValueError`` with the shortest one that works.
     """
     rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0)
     duration = validation.duration_of(duration)
     acceleration = validation.positive_per_joint('acceleration', acceleration, rows.shape[1])
-    return single_segment(rows[0], rows[1], duration, acceleration, rows[2])
+    with np.errstate(over='ignore', under='ignore', divide='ignore', invalid='ignore'):
+        plan = single_segment(rows[0], rows[1], np.float64(duration), acceleration, rows[2])
+    if not (np.isfinite(plan.breakpoints).all() and np.isfinite(plan.coefficients).all()):
+        raise ValueError(f'lspb: the plan overflows with duration {duration:g} s and '
+                         f'acceleration {acceleration.tolist()}: no finite plan; use values '
+                         'within about 1e-100..1e100 of each other')
+    return plan
 
 
 def single_segment(
@@ -92,9 +99,14 @@ def single_segment(
     """
     displacement = goal - start
     if np.count_nonzero(start_velocity):
-        cruise = _moving_start_cruise(displacement, duration, acceleration, start_velocity)
+        second_order.check_reachable(displacement, start_velocity, duration, acceleration)
+        durations = np.full(start.size, duration)
+        low, high = 0.5 * (start_velocity - acceleration * durations), \
+            0.5 * (start_velocity + acceleration * durations)
+        cruise = np.clip(second_order.cruise_velocity(displacement, start_velocity, durations,
+                                                      acceleration), low, high)
         first_blend = np.abs(cruise - start_velocity) / acceleration
-        last_blend = np.abs(cruise) / acceleration
+        last_blend = np.minimum(np.abs(cruise) / acceleration, duration - first_blend)
     else:
         first_blend = last_blend = _rest_start_blend_time(displacement, duration, acceleration)
         cruise = np.sign(displacement) * acceleration * first_blend
@@ -188,8 +200,9 @@ def _rest_start_blend_time(
     ``t_b = t/2 - sqrt(θ̈² t² - 4 θ̈ |Δθ|)/(2 θ̈)``, evaluated as the equal
     ``2 |Δθ| / (θ̈ (t + sqrt(t² - 4 |Δθ|/θ̈)))``, which does not cancel for tiny moves.
     """
-    room = duration**2 - 4.0 * np.abs(displacement) / acceleration
-    too_low = room < -_FEASIBILITY_TOLERANCE * duration**2
+    # room = 1 - 4|Δθ|/(θ̈ t²), formed without t² so that long durations do not overflow.
+    room = 1.0 - 4.0 * np.abs(displacement) / acceleration / duration / duration
+    too_low = room < -_FEASIBILITY_TOLERANCE
     if np.count_nonzero(too_low):
         joint = int(np.argmax(too_low))
         minimum = 4.0 * abs(displacement[joint]) / duration**2
@@ -197,53 +210,8 @@ def _rest_start_blend_time(
             f'lspb: {{joint}}: acceleration {acceleration[joint]:g} is too low to move '
             f'{displacement[joint]:g} in {duration:g} s; eq. (6) needs at least '
             f'{_round_up(minimum)}', joint)
-    return 2.0 * np.abs(displacement) / (
-        acceleration * (duration + np.sqrt(np.maximum(room, 0.0))))
-
-
-def _moving_start_cruise(
-    displacement: np.ndarray,
-    duration: float,
-    acceleration: np.ndarray,
-    start_velocity: np.ndarray,
-) -> np.ndarray:
-    """
-    Cruise velocity that moves ``displacement`` in ``duration`` from ``start_velocity``.
-
-    Blend from ``v0`` to the cruise velocity ``vc``, cruise, blend to rest, all at
-    ``acceleration``. The blends fit while ``vc`` lies in
-    ``[(v0 - θ̈t)/2, (v0 + θ̈t)/2]``, where the displacement is monotonic in ``vc``:
-    bisection finds it, for every joint at once.
-    """
-    span = acceleration * duration
-    low, high = (start_velocity - span) / 2.0, (start_velocity + span) / 2.0
-    reachable = np.abs(start_velocity) <= span * (1.0 + _FEASIBILITY_TOLERANCE)
-    reach_low = _moving_displacement(low, start_velocity, duration, acceleration)
-    reach_high = _moving_displacement(high, start_velocity, duration, acceleration)
-    slack = _FEASIBILITY_TOLERANCE * (np.abs(displacement) + 1.0)
-    fits = reachable & (reach_low - slack <= displacement) & (displacement <= reach_high + slack)
-    if not fits.all():
-        joint = int(np.flatnonzero(~fits)[0])
-        raise ValueError(
-            f'lspb: joint {joint}: cannot move {displacement[joint]:g} in {duration:g} s '
-            f'from velocity {start_velocity[joint]:g} with acceleration '
-            f'{acceleration[joint]:g}; give a higher acceleration or a longer duration')
-    for _ in range(_BISECTION_STEPS):
-        middle = 0.5 * (low + high)
-        short = _moving_displacement(middle, start_velocity, duration, acceleration) < displacement
-        low = np.where(short, middle, low)
-        high = np.where(short, high, middle)
-    return 0.5 * (low + high)
-
-
-def _moving_displacement(
-    cruise: np.ndarray, start_velocity: np.ndarray, duration: float, acceleration: np.ndarray
-) -> np.ndarray:
-    """Displacement of blend (v0 → vc), cruise at vc, blend (vc → 0) in ``duration``."""
-    first = np.abs(cruise - start_velocity) / acceleration
-    last = np.abs(cruise) / acceleration
-    linear = duration - first - last
-    return 0.5 * (start_velocity + cruise) * first + cruise * linear + 0.5 * cruise * last
+    return 2.0 * np.abs(displacement) / acceleration / (
+        duration * (1.0 + np.sqrt(np.maximum(room, 0.0))))
 
 
 def _via_timing(

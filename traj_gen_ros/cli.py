@@ -11,8 +11,9 @@ boundary velocities) are one number for all joints or a comma list, one per join
 ``--durations`` (alias ``--duration``) gives one duration per segment. Joints are numbered
 from 0 (as in the solver's messages); points keep Craig's names from 1 (t1, θ̇12, t12).
 
-Exit codes: 0 success, 1 not accepted by the node, 2 bad arguments or a plan the solver
-refuses, 3 no answer from ROS in time, 4 an internal error (a bug: please report it).
+Exit codes: 0 success, 1 not accepted by the node, 2 bad arguments, a plan the solver
+refuses or a missing package (matplotlib for ``plot``), 3 no answer from ROS in time, 4 an
+internal error (a bug: please report it).
 Errors are one line on stderr.
 """
 
@@ -35,6 +36,8 @@ from traj_gen_ros.cli_args import (  # shared with cli_ros, which must not impor
 )
 
 PROG = 'traj-gen'
+# What requirements.txt pins; named in the error when matplotlib is missing.
+MATPLOTLIB_REQUIREMENT = 'matplotlib==3.11.2'
 PROFILES = ('cubic', 'quintic', 'lspb', 'cubic-via', 'quintic-via', 'min-time')
 _UNSIGNED = r'(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?'
 # Lets argparse take '-1,2' (a point of two joints) as a value, not as an option.
@@ -434,8 +437,29 @@ def run_solve(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def require_plotting() -> object:
+    """
+    Import :mod:`traj_gen_ros.plotting`, or raise UsageError saying to install matplotlib.
+
+    matplotlib is a runtime requirement (requirements.txt, setup.py, package.xml), but a
+    user may run ``traj-gen`` from an environment without it; that is not a bug (exit 4)
+    but a missing package (exit 2) with the command that installs it.
+    """
+    try:
+        from traj_gen_ros import plotting
+    except ImportError as error:
+        if (error.name or '').startswith('traj_gen_ros'):
+            raise
+        raise UsageError(
+            f'plot needs matplotlib, which cannot be imported ({_one_line(error)}): '
+            f'install it with "pip install {MATPLOTLIB_REQUIREMENT}" or, on a ROS '
+            'install, "apt install python3-matplotlib"') from None
+    return plotting
+
+
 def run_plot(args: argparse.Namespace) -> int:
     """``traj-gen plot``: write the PNG of a plan or of a trajectory from a topic."""
+    plotting = require_plotting()  # before any planning or waiting for ROS
     if args.topic is not None:
         if args.profile is not None:
             raise UsageError('give either a profile or --topic, not both')
@@ -443,7 +467,6 @@ def run_plot(args: argparse.Namespace) -> int:
         return cli_ros.run_plot_topic(args)
     if args.profile is None:
         raise UsageError('plot needs a profile (e.g. plot cubic …) or --topic TOPIC')
-    from traj_gen_ros import plotting
 
     plan = make_plan(args)
     info = plotting.plot_trajectory(

@@ -19,7 +19,7 @@ from traj_gen_ros.trajectory import Trajectory
 from traj_gen_ros.validation import ArrayLike
 
 # Eq. (9) with t_f = 1; columns are (θ0, θ̇0, θf, θ̇f), rows a0…a3.
-_CUBIC_MATRIX = np.array([
+CUBIC_MATRIX = np.array([
     [1.0, 0.0, 0.0, 0.0],
     [0.0, 1.0, 0.0, 0.0],
     [-3.0, -2.0, 3.0, -1.0],
@@ -29,7 +29,7 @@ _CUBIC_ORDERS = np.array([0, 1, 0, 1])
 _CUBIC_EXPONENTS = _CUBIC_ORDERS[None, :] - np.arange(4)[:, None]
 
 # Quintic eq. (3) with t_f = 1; columns are (θ0, θ̇0, θ̈0, θf, θ̇f, θ̈f), rows a0…a5.
-_QUINTIC_MATRIX = np.array([
+QUINTIC_MATRIX = np.array([
     [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
     [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
     [0.0, 0.0, 0.5, 0.0, 0.0, 0.0],
@@ -58,7 +58,7 @@ def cubic(
     duration = validation.duration_of(duration)
     start = conditions[0].copy()
     conditions[0], conditions[2] = 0.0, conditions[2] - start
-    return _segments(_CUBIC_MATRIX, _CUBIC_EXPONENTS, start[None], conditions[None],
+    return _segments(CUBIC_MATRIX, _CUBIC_EXPONENTS, start[None], conditions[None],
                      np.array([duration]))
 
 
@@ -80,7 +80,7 @@ def quintic(
     duration = validation.duration_of(duration)
     start = conditions[0].copy()
     conditions[0], conditions[3] = 0.0, conditions[3] - start
-    return _segments(_QUINTIC_MATRIX, _QUINTIC_EXPONENTS, start[None], conditions[None],
+    return _segments(QUINTIC_MATRIX, _QUINTIC_EXPONENTS, start[None], conditions[None],
                      np.array([duration]))
 
 
@@ -107,7 +107,7 @@ def cubic_via(
     steps = np.diff(path, axis=0)
     boundary = np.stack([np.zeros_like(steps), point_velocities[:-1], steps,
                          point_velocities[1:]], axis=1)
-    return _segments(_CUBIC_MATRIX, _CUBIC_EXPONENTS, path[:-1], boundary, durations)
+    return _segments(CUBIC_MATRIX, _CUBIC_EXPONENTS, path[:-1], boundary, durations)
 
 
 def quintic_via(
@@ -137,7 +137,7 @@ def quintic_via(
         np.zeros_like(steps), point_velocities[:-1], point_accelerations[:-1],
         steps, point_velocities[1:], point_accelerations[1:],
     ], axis=1)
-    return _segments(_QUINTIC_MATRIX, _QUINTIC_EXPONENTS, path[:-1], boundary, durations)
+    return _segments(QUINTIC_MATRIX, _QUINTIC_EXPONENTS, path[:-1], boundary, durations)
 
 
 def heuristic_velocities(

@@ -19,18 +19,17 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from traj_gen_ros import validation
-from traj_gen_ros.blends import lspb, lspb_via, three_pieces
-from traj_gen_ros.limits import within_limits
+from traj_gen_ros import second_order, validation
+from traj_gen_ros.blends import lspb_via, three_pieces
+from traj_gen_ros.limits import JointError, within_limits
 from traj_gen_ros.polynomial import cubic, cubic_via, quintic, quintic_via
+from traj_gen_ros.polynomial_timing import minimum_duration, SHORTEST_POLYNOMIAL
 from traj_gen_ros.trajectory import Trajectory
 from traj_gen_ros.validation import ArrayLike
 
 PROFILES = ('lspb', 'cubic', 'quintic')
 # (peak velocity, peak acceleration) of a rest-to-rest unit move in unit time.
 _POLYNOMIAL_PEAKS = {'cubic': (1.5, 6.0), 'quintic': (15.0 / 8.0, 10.0 / np.sqrt(3.0))}
-# Polynomial plans last at least this long (s): shorter ones' coefficients ~ Δ/T⁵ overflow.
-_SHORTEST_POLYNOMIAL = 1e-9
 _BISECTION_STEPS = 60
 
 
@@ -71,8 +70,22 @@ def min_time(
     rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0, a0=a0, max_velocity=max_velocity,
                                      max_acceleration=max_acceleration)
     validation.require_positive(rows[4:], ('max_velocity', 'max_acceleration'))
-    start, goal, start_velocity, start_acceleration, max_velocity, max_acceleration = rows
     check_profile(profile)
+    # Overflow and underflow are looked for in the result, which names the joint.
+    with np.errstate(over='ignore', under='ignore', divide='ignore', invalid='ignore'):
+        try:
+            plan = _plan(profile, *rows)
+        except (OverflowError, ZeroDivisionError):
+            plan = None
+    return require_finite(plan, rows)
+
+
+def _plan(profile: str, start: np.ndarray, goal: np.ndarray, start_velocity: np.ndarray,
+          start_acceleration: np.ndarray, max_velocity: np.ndarray,
+          max_acceleration: np.ndarray) -> Trajectory | None:
+    """Dispatch :func:`min_time` on validated ``(joints,)`` rows; ``None`` if it overflows."""
+    if profile != 'quintic':  # only the quintic starts from an acceleration
+        start_acceleration = np.zeros_like(start_acceleration)
     if np.count_nonzero(start_velocity) or np.count_nonzero(start_acceleration):
         return _moving_min_time(
             start, goal, max_velocity, max_acceleration, profile, start_velocity,
@@ -85,8 +98,35 @@ def min_time(
     duration = float(joint_times.max())
     if duration == 0.0:
         return hold(start)
+    if not np.isfinite(duration):
+        return None
     polynomial = cubic if profile == 'cubic' else quintic
-    return polynomial(start, goal, max(duration, _SHORTEST_POLYNOMIAL))
+    return polynomial(start, goal, max(duration, SHORTEST_POLYNOMIAL))
+
+
+def require_finite(plan: Trajectory | None, rows: np.ndarray) -> Trajectory:
+    """
+    Return ``plan`` if its duration and coefficients are finite, else raise ``ValueError``.
+
+    ``rows`` are the validated inputs ``(q0, qf, v0, a0, v_max, a_max)``; the message names
+    the joint whose numbers overflowed (or the one with the longest move) and its inputs.
+    """
+    if plan is not None and np.isfinite(plan.duration) and \
+            validation.every(np.isfinite(plan.coefficients)):
+        return plan
+    start, goal, start_velocity, start_acceleration, max_velocity, max_acceleration = rows
+    if plan is not None and not validation.every(np.isfinite(plan.coefficients)):
+        joint = int(np.argmin(np.isfinite(plan.coefficients).all(axis=(0, 1))))
+    else:  # the joint with the longest rough duration; it may be infinite itself
+        with np.errstate(over='ignore'):
+            joint = int(np.argmax(np.abs(goal - start) / max_velocity
+                                  + (max_velocity + np.abs(start_velocity)) / max_acceleration))
+    raise JointError(
+        f'{{joint}}: moving {goal[joint] - start[joint]:g} rad from velocity '
+        f'{start_velocity[joint]:g} rad/s and acceleration {start_acceleration[joint]:g} '
+        f'rad/s^2 with max_velocity {max_velocity[joint]:g} rad/s and max_acceleration '
+        f'{max_acceleration[joint]:g} rad/s^2 overflows: no finite plan; use limits and '
+        'distances within about 1e-100..1e100 of each other', joint)
 
 
 def _min_time_lspb(
@@ -231,33 +271,88 @@ def _moving_min_time(
     start_acceleration: np.ndarray,
 ) -> Trajectory:
     """
-    Shortest synchronised plan from a moving state to rest at ``goal``.
+    Shortest synchronised plan from a moving state to rest at ``goal``, computed exactly.
 
-    A start already beyond a limit (limits lowered mid-motion) is allowed to stay at that
-    level while it slows down; so is the start acceleration, for the quintic, the one
-    profile that starts from it. A quintic whose start acceleration pushes a joint at its
-    velocity limit further out has no duration that works: that raises ``ValueError``.
+    LSPB: :mod:`traj_gen_ros.second_order` in closed form. Cubic and quintic: each joint's
+    exact set of feasible durations (:mod:`traj_gen_ros.polynomial_timing`), then the
+    smallest duration in all of them. A polynomial start already beyond a limit (limits
+    lowered mid-motion) may stay at that level while it slows down: the polynomial cannot
+    leave it at once. ``ValueError`` when no duration works, saying for which joint.
     """
+    if profile == 'lspb':
+        return _moving_lspb(start, goal, max_velocity, max_acceleration, start_velocity)
     max_velocity = np.maximum(max_velocity, np.abs(start_velocity))
     if profile == 'quintic':
         max_acceleration = np.maximum(max_acceleration, np.abs(start_acceleration))
-    distance = np.abs(goal - start)
-    stopping = start_velocity**2 / (2.0 * max_acceleration)
-    lower = float(np.max(rest_to_rest_times(distance + stopping, max_velocity,
-                                            max_acceleration, profile)))
-    lower = max(lower * 0.25, float(np.max(np.abs(start_velocity) / max_acceleration)),
-                _SHORTEST_POLYNOMIAL)
-    planners = {
-        'cubic': lambda duration: cubic(start, goal, duration, v0=start_velocity),
-        'quintic': lambda duration: quintic(start, goal, duration, v0=start_velocity,
-                                            a0=start_acceleration),
-        'lspb': lambda duration: lspb(start, goal, duration, max_acceleration,
-                                      v0=start_velocity),
-    }
-    try:
-        return shortest_duration(planners[profile], lower, max_velocity, max_acceleration)
-    except ValueError:
-        raise ValueError(
-            f'no {profile} from velocity {start_velocity.tolist()} and acceleration '
-            f'{start_acceleration.tolist()} stays within the limits, however long; stop first '
-            'or choose another profile') from None
+    else:
+        start_acceleration = np.zeros_like(start_velocity)
+    # Start terms far below their limits (1e-12) only blur the candidate polynomials' degree.
+    duration, hopeless = minimum_duration(
+        profile, goal - start,
+        np.where(np.abs(start_velocity) < 1e-12 * max_velocity, 0.0, start_velocity),
+        np.where(np.abs(start_acceleration) < 1e-12 * max_acceleration, 0.0,
+                 start_acceleration), max_velocity, max_acceleration)
+    if hopeless is not None:
+        raise JointError(
+            f'{{joint}}: no {profile} from velocity {start_velocity[hopeless]:g} and '
+            f'acceleration {start_acceleration[hopeless]:g} stays within the limits, however '
+            'long; stop first or choose another profile', hopeless)
+    if duration is None:
+        raise ValueError(f'no {profile} duration suits every joint at once (their feasible '
+                         'durations do not overlap); stop first or choose another profile')
+    planner = cubic if profile == 'cubic' else quintic
+    extra = {'a0': start_acceleration} if profile == 'quintic' else {}
+    return planner(start, goal, duration, v0=start_velocity, **extra)
+
+
+def _moving_lspb(
+    start: np.ndarray,
+    goal: np.ndarray,
+    max_velocity: np.ndarray,
+    max_acceleration: np.ndarray,
+    start_velocity: np.ndarray,
+) -> Trajectory:
+    """
+    Time-optimal synchronised LSPB from ``v0`` (second order), every joint at ``a_max``.
+
+    A joint faster than its limit first brakes to it (a fourth, leading piece); every joint
+    then runs blend, line, blend over the common duration with the cruise velocity of
+    :func:`traj_gen_ros.second_order.cruise_velocity`.
+    """
+    brake_time, brake_move, velocity = second_order.brake_to_limit(
+        start_velocity, max_velocity, max_acceleration)
+    displacement = goal - start - brake_move
+    joint_times = brake_time + second_order.minimum_times(
+        displacement, velocity, max_velocity, max_acceleration)
+    duration = float(joint_times.max())
+    if duration == 0.0:
+        return hold(start)
+    remaining = duration - brake_time
+    low = np.maximum(0.5 * (velocity - max_acceleration * remaining), -max_velocity)
+    high = np.minimum(0.5 * (velocity + max_acceleration * remaining), max_velocity)
+    cruise = np.clip(second_order.cruise_velocity(displacement, velocity, remaining,
+                                                  max_acceleration), low, high)
+    first = np.abs(cruise - velocity) / max_acceleration
+    last = np.minimum(np.abs(cruise) / max_acceleration, remaining - first)
+    moves = (0.5 * (velocity + cruise) * first, 0.5 * cruise * last)
+    accelerations = (np.sign(cruise - velocity) * max_acceleration,
+                     -np.sign(cruise) * max_acceleration)
+    blended = three_pieces(start + brake_move, goal, duration, (first, last), moves, cruise,
+                           velocity, accelerations)
+    if not np.count_nonzero(brake_time):
+        return blended
+    return _with_brake(start, start_velocity, brake_time, max_acceleration, blended)
+
+
+def _with_brake(start: np.ndarray, start_velocity: np.ndarray, brake_time: np.ndarray,
+                max_acceleration: np.ndarray, blended: Trajectory) -> Trajectory:
+    """Prepend the brake piece to blend, line, blend shifted by ``brake_time``."""
+    breakpoints = np.empty((5, start.size))
+    breakpoints[0] = 0.0
+    breakpoints[1:] = brake_time + blended.breakpoints
+    breakpoints[-1] = blended.duration
+    coefficients = np.zeros((4, 3, start.size))
+    coefficients[0, 0], coefficients[0, 1] = start, start_velocity
+    coefficients[0, 2] = -0.5 * np.sign(start_velocity) * max_acceleration * (brake_time > 0)
+    coefficients[1:] = blended.coefficients
+    return Trajectory(breakpoints, coefficients)

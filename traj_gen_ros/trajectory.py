@@ -11,7 +11,6 @@ Units: seconds for time, radians (or metres) for position.
 from __future__ import annotations
 
 from functools import cached_property
-import math
 
 import numpy as np
 
@@ -20,6 +19,8 @@ _PEAK_NEWTON_STEPS = 8
 # Samples per piece above which each piece is evaluated as one matrix product.
 _SAMPLES_PER_PIECE_FOR_MATMUL = 16
 _SAMPLES_PER_PRODUCT = 4096  # keeps each product's operands in cache
+# Per-joint breakpoints up to this many are compared at once; more use searchsorted.
+_PIECES_FOR_COMPARISON = 16
 
 
 class Trajectory:
@@ -68,7 +69,9 @@ class Trajectory:
             raise ValueError(f'times must be finite: sample {np.argmin(np.isfinite(times))} '
                              f'is {times[np.argmin(np.isfinite(times))]}')
         times = np.clip(times, 0.0, self.duration)
-        breakpoints, coefficients = self._shared_pieces
+        if self.breakpoints.ndim == 2:
+            return self._sample_per_joint(times)
+        breakpoints, coefficients = self.breakpoints, self.coefficients
         if times.size < _SAMPLES_PER_PIECE_FOR_MATMUL * len(coefficients):
             piece = np.searchsorted(breakpoints[1:-1], times, side='right')
             local_time = (times - breakpoints[piece])[:, None]
@@ -91,54 +94,57 @@ class Trajectory:
         Each piece is searched from a few seed samples, refined by Newton steps on the next
         derivative, so the values are exact extrema to rounding, not sampled estimates.
         """
-        breakpoints, coefficients = self._shared_pieces
-        velocity = _derivative(coefficients)
+        velocity = _derivative(self.coefficients)
         acceleration = _derivative(velocity)
-        durations = np.broadcast_to(np.diff(breakpoints)[:, None], velocity[:, 0].shape)
-        return _peak_abs(velocity, durations), _peak_abs(acceleration, durations)
+        durations = self._piece_durations(velocity.shape[2])
+        return peak_abs(velocity, durations), peak_abs(acceleration, durations)
+
+    def _piece_durations(self, joint_count: int) -> np.ndarray:
+        """Each piece's length (s) per joint, ``(pieces, joints)``."""
+        lengths = np.diff(self.breakpoints, axis=0)
+        return np.broadcast_to(lengths if lengths.ndim == 2 else lengths[:, None],
+                               (len(self.coefficients), joint_count))
 
     def peak_jerk(self) -> np.ndarray:
         """Largest ``|jerk|`` (rad/s³) per joint, ``(joints,)``: exact, from the coefficients."""
         jerk = _derivative(_derivative(_derivative(self.coefficients)))
         if jerk.shape[1] == 0:
             return np.zeros(self.joint_count)
-        breakpoints = self.breakpoints if self.breakpoints.ndim == 2 else \
-            self.breakpoints[:, None]
-        durations = np.broadcast_to(np.diff(breakpoints, axis=0), jerk[:, 0].shape)
-        return _peak_abs(jerk, durations)
+        return peak_abs(jerk, self._piece_durations(self.joint_count))
 
-    @cached_property
-    def _shared_pieces(self) -> tuple[np.ndarray, np.ndarray]:
+    def _sample_per_joint(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """
-        Give breakpoints shared by every joint, ``(pieces + 1,)``, with coefficients on them.
+        Sample pieces whose breakpoints differ per joint (LSPB, S-curve): linear in joints.
 
-        Per-joint breakpoints (LSPB) are merged into their union, and each joint's
-        polynomial is re-expanded about the start of every union interval (Taylor shift:
-        ``c'_k = Σ_m C(m, k) c_m d^(m-k)``).
+        Each sample's piece is found per joint (a comparison with the few interior
+        breakpoints, or one ``searchsorted`` per joint when there are many), then every
+        sample and joint runs Horner's rule on its own piece at once.
         """
-        if self.breakpoints.ndim == 1:
-            return self.breakpoints, self.coefficients
-        union = np.unique(self.breakpoints)
-        if union.size == 1:  # zero duration: one zero-length piece, each joint's last
-            union = np.repeat(union, 2)
-        starts = union[:-1]
+        interior = self.breakpoints[1:-1]
         joints = np.arange(self.joint_count)
-        piece = np.empty((starts.size, self.joint_count), dtype=np.intp)
-        for joint in joints:
-            piece[:, joint] = np.searchsorted(self.breakpoints[1:-1, joint], starts, 'right')
-        offset = starts[:, None] - self.breakpoints[piece, joints]
-        source = self.coefficients[piece, :, joints].transpose(0, 2, 1)
-        shifted = np.zeros_like(source)
-        for power in range(self.degree + 1):
-            for higher in range(power, self.degree + 1):
-                shifted[:, power] += (math.comb(higher, power) * source[:, higher]
-                                      * offset ** (higher - power))
-        return union, shifted
+        if len(interior) <= _PIECES_FOR_COMPARISON:
+            piece = np.count_nonzero(times[:, None, None] >= interior[None], axis=1)
+        else:
+            piece = np.empty((times.size, self.joint_count), dtype=np.intp)
+            for joint in joints:
+                piece[:, joint] = np.searchsorted(interior[:, joint], times, side='right')
+        flat = piece * self.joint_count + joints  # index into (pieces * joints)
+        local_time = times[:, None] - self.breakpoints[:-1].reshape(-1)[flat]
+        gathered = [self.coefficients[:, power].reshape(-1)[flat]
+                    for power in range(self.degree + 1)]
+        states = []
+        for order in range(3):
+            value = np.zeros_like(local_time)
+            for power in range(self.degree, order - 1, -1):
+                value *= local_time
+                value += _falling_factorial(power, order) * gathered[power]
+            states.append(value)
+        return states[0], states[1], states[2]
 
     @cached_property
     def _state_tables(self) -> np.ndarray:
         """Position, velocity, acceleration coefficients, ``(pieces, 3, n + 1, joints)``."""
-        coefficients = self._shared_pieces[1]
+        coefficients = self.coefficients
         tables = np.zeros((len(coefficients), 3) + coefficients.shape[1:])
         derivative = coefficients
         for order in range(3):
@@ -148,7 +154,7 @@ class Trajectory:
 
     def _sample_sorted(self, times: np.ndarray) -> np.ndarray:
         """Evaluate ascending ``times`` piece by piece: ``(3, samples, joints)``."""
-        breakpoints = self._shared_pieces[0]
+        breakpoints = self.breakpoints
         states = np.zeros((3, times.size, self.joint_count))
         edges = np.searchsorted(times, breakpoints, side='left')
         edges[0], edges[-1] = 0, times.size
@@ -199,7 +205,7 @@ def _polyval(coefficients: np.ndarray, local_time: np.ndarray) -> np.ndarray:
     return value
 
 
-def _peak_abs(coefficients: np.ndarray, durations: np.ndarray) -> np.ndarray:
+def peak_abs(coefficients: np.ndarray, durations: np.ndarray) -> np.ndarray:
     """
     Find the exact largest ``|p(t)|`` over every piece, per joint: ``(joints,)``.
 

@@ -1,0 +1,360 @@
+"""
+Joint limits from a URDF robot description, merged with the node's parameters.
+
+No ROS import: the URDF is an XML string (what ``robot_description`` holds), parsed with
+``urdf_parser_py`` (PyPI ``urdfdom-py``, the ROS URDF parser). Semantics are urdfdom's:
+
+- ``revolute`` and ``prismatic`` joints must have a ``<limit>`` element; its ``lower`` and
+  ``upper`` default to 0 (so a joint whose limit gives neither cannot move), its
+  ``velocity`` is required. Units: rad and rad/s (revolute), m and m/s (prismatic).
+- ``continuous`` joints have no position limits; a ``<limit>`` on them gives a velocity.
+- ``fixed``, ``floating`` and ``planar`` joints have no single coordinate to plan: naming
+  one as a trajectory joint is an error.
+- A joint absent from the URDF has no URDF limits.
+
+The limits in force are the tighter of the URDF and the parameters ``min_position``,
+``max_position`` (±inf: none) and ``max_velocity``; for every joint and bound the source
+is recorded: :data:`URDF`, :data:`PARAMETER` or :data:`NONE` (on a tie, the URDF).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+import math
+import re
+import threading
+
+from lxml import etree
+import numpy as np
+from urdf_parser_py import xml_reflection
+from urdf_parser_py.urdf import URDF as UrdfRobot  # noqa: N811 (a class)
+from urdf_parser_py.xml_reflection import core as xml_core
+
+URDF = 'urdf'
+PARAMETER = 'parameter'
+NONE = 'none'
+ABSENT = 'absent'  # the joint type recorded for a joint the URDF does not have
+_MOVABLE = ('revolute', 'continuous', 'prismatic')
+_SOURCE_TEXT = {URDF: 'URDF', NONE: 'none'}
+_PARAMETER_NAME = {'lower': 'min_position', 'upper': 'max_position',
+                   'velocity': 'max_velocity'}
+_XML_DECLARATION = re.compile(r'^\s*<\?xml[^>]*\?>')
+_PARSER_LOCK = threading.Lock()  # urdf_parser_py reports warnings through a module global
+
+
+def _frozen(values: Sequence[float]) -> np.ndarray:
+    array = np.array(values, dtype=float)
+    array.flags.writeable = False
+    return array
+
+
+@dataclass(frozen=True)
+class UrdfLimits:
+    """
+    What a URDF says about an ordered list of joints (±inf where it says nothing).
+
+    :ivar joints: the joint names, in the caller's order.
+    :ivar lower: lower position limits, rad or m, ``(joints,)``.
+    :ivar upper: upper position limits, rad or m, ``(joints,)``.
+    :ivar velocity: velocity limits, rad/s or m/s, ``(joints,)``.
+    :ivar types: each joint's URDF type, or :data:`ABSENT`.
+    :ivar warnings: what urdf_parser_py would have printed (unknown tags, …).
+    """
+
+    joints: tuple[str, ...]
+    lower: np.ndarray
+    upper: np.ndarray
+    velocity: np.ndarray
+    types: tuple[str, ...]
+    warnings: tuple[str, ...] = ()
+
+    @classmethod
+    def unlimited(cls, joints: Sequence[str]) -> UrdfLimits:
+        """Return the limits of joints without a URDF: none at all."""
+        count = len(joints)
+        return cls(tuple(joints), _frozen([-math.inf] * count), _frozen([math.inf] * count),
+                   _frozen([math.inf] * count), (ABSENT,) * count)
+
+
+@dataclass(frozen=True)
+class PositionLimits:
+    """
+    Position limits in force, rad or m, ``(joints,)``, and where each bound came from.
+
+    :ivar lower_source: per joint :data:`URDF`, :data:`PARAMETER` or :data:`NONE`.
+    :ivar upper_source: likewise for ``upper``.
+    """
+
+    lower: np.ndarray
+    upper: np.ndarray
+    lower_source: tuple[str, ...]
+    upper_source: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class JointLimits:
+    """
+    The limits in force for an ordered list of joints (see :func:`merge_limits`).
+
+    :ivar joints: the joint names.
+    :ivar position: position limits and their sources.
+    :ivar velocity: velocity limits, rad/s or m/s, ``(joints,)``; inf: none.
+    :ivar velocity_source: per joint :data:`URDF`, :data:`PARAMETER` or :data:`NONE`.
+    :ivar units: per joint ``'rad'``, or ``'m'`` for a prismatic joint.
+    """
+
+    joints: tuple[str, ...]
+    position: PositionLimits
+    velocity: np.ndarray
+    velocity_source: tuple[str, ...]
+    units: tuple[str, ...]
+
+
+def _one_line(text: object) -> str:
+    return ' '.join(str(text).split())
+
+
+def parse_urdf(urdf_xml: str | bytes) -> tuple[UrdfRobot, tuple[str, ...]]:
+    """
+    Parse a URDF document with urdf_parser_py, quietly.
+
+    :param urdf_xml: the XML text (an XML declaration with an encoding is allowed).
+    :return: the parsed robot, and what the parser reported (unknown tags or attributes,
+        …) instead of printing it to stderr, one line each.
+    :raises ValueError: not well-formed XML, not a ``<robot>``, or not a valid URDF; one
+        line saying why.
+    """
+    if isinstance(urdf_xml, str):
+        urdf_xml = _XML_DECLARATION.sub('', urdf_xml, count=1)
+    if not urdf_xml.strip():
+        raise ValueError('invalid URDF: the robot description is empty')
+    try:
+        root = etree.fromstring(urdf_xml)
+    except etree.XMLSyntaxError as error:
+        raise ValueError(f'invalid URDF: not well-formed XML: {_one_line(error)}') from None
+    if root.tag != 'robot':
+        raise ValueError(f'invalid URDF: the root element is <{root.tag}>, not <robot>')
+    warnings: list[str] = []
+    with _PARSER_LOCK:
+        saved = xml_core.on_error, xml_reflection.on_error
+        xml_core.on_error = xml_reflection.on_error = warnings.append
+        try:
+            robot = UrdfRobot.from_xml_string(etree.tostring(root))
+        except xml_core.ParseError as error:
+            detail = _one_line(error).removeprefix('ParseError in ')
+            raise ValueError(f'invalid URDF: {detail}') from None
+        except Exception as error:  # noqa: BLE001 - whatever the parser trips on
+            raise ValueError(f'invalid URDF: {type(error).__name__}: {_one_line(error)}') \
+                from None
+        finally:
+            xml_core.on_error, xml_reflection.on_error = saved
+    return robot, tuple(_one_line(warning) for warning in warnings)
+
+
+def urdf_limits(urdf_xml: str | bytes, joints: Sequence[str]) -> UrdfLimits:
+    """
+    Read the position and velocity limits of ``joints`` from a URDF.
+
+    :param urdf_xml: the URDF document (e.g. the ``robot_description`` string).
+    :param joints: the trajectory's joint names, in order.
+    :return: per joint lower/upper (rad or m) and velocity (rad/s or m/s) limits, ±inf
+        where the URDF has none (continuous joints' positions, absent joints).
+    :raises ValueError: an invalid URDF, a joint defined twice, a revolute or prismatic
+        joint without ``<limit>``, a fixed/floating/planar trajectory joint, a NaN limit,
+        ``lower > upper`` or a velocity limit that is not > 0.
+    """
+    robot, warnings = parse_urdf(urdf_xml)
+    by_name = {}
+    for joint in robot.joints:
+        if joint.name in by_name:
+            raise ValueError(f"invalid URDF: joint '{joint.name}' is defined twice")
+        by_name[joint.name] = joint
+    lower, upper, velocity, types = [], [], [], []
+    for name in joints:
+        joint = by_name.get(name)
+        if joint is None:
+            bounds, kind = (-math.inf, math.inf, math.inf), ABSENT
+        else:
+            bounds, kind = _joint_bounds(joint), joint.type
+        lower.append(bounds[0])
+        upper.append(bounds[1])
+        velocity.append(bounds[2])
+        types.append(kind)
+    return UrdfLimits(tuple(joints), _frozen(lower), _frozen(upper), _frozen(velocity),
+                      tuple(types), warnings)
+
+
+def _joint_bounds(joint: object) -> tuple[float, float, float]:
+    """Return ``(lower, upper, velocity)`` of one URDF joint (urdfdom semantics)."""
+    name, kind, limit = joint.name, joint.type, joint.limit
+    if kind not in _MOVABLE:
+        raise ValueError(f"URDF joint '{name}' is {kind}: only revolute, continuous and "
+                         'prismatic joints can be trajectory joints')
+    if limit is None:
+        if kind == 'continuous':
+            return -math.inf, math.inf, math.inf
+        raise ValueError(f"invalid URDF: {kind} joint '{name}' has no <limit> element "
+                         '(required for revolute and prismatic joints)')
+    values = {'lower': limit.lower, 'upper': limit.upper, 'velocity': limit.velocity}
+    for key, value in values.items():
+        if math.isnan(value):
+            raise ValueError(f"invalid URDF: joint '{name}' has {key} limit NaN")
+    if not values['velocity'] > 0:
+        raise ValueError(f"URDF joint '{name}' has velocity limit {values['velocity']:g}: "
+                         'it must be > 0 for the joint to move')
+    if kind == 'continuous':
+        return -math.inf, math.inf, values['velocity']
+    lower, upper = values['lower'], values['upper']
+    if lower > upper or lower == math.inf or upper == -math.inf:
+        raise ValueError(f"invalid URDF: joint '{name}' has lower limit {lower:g} and upper "
+                         f'limit {upper:g}: lower must be <= upper')
+    return lower, upper, values['velocity']
+
+
+def _per_joint(values: float | Sequence[float], name: str, count: int) -> np.ndarray:
+    array = np.asarray(values, dtype=float)
+    if array.ndim == 0:
+        array = np.full(count, float(array))
+    if array.shape != (count,):
+        raise ValueError(f'{name} has {array.size} values but there are {count} joints: give '
+                         'one value for all joints or one per joint')
+    if np.isnan(array).any():
+        raise ValueError(f'{name} must not be NaN')
+    return array
+
+
+def merge_limits(urdf: UrdfLimits, *, min_position: float | Sequence[float] = -math.inf,
+                 max_position: float | Sequence[float] = math.inf,
+                 max_velocity: float | Sequence[float] = math.inf) -> JointLimits:
+    """
+    Merge URDF limits with the parameters: the tighter bound wins, its source is kept.
+
+    :param urdf: from :func:`urdf_limits`, or :meth:`UrdfLimits.unlimited` without a URDF.
+    :param min_position: lower position limit, rad or m, one or one per joint; -inf: none.
+    :param max_position: upper position limit, likewise; +inf: none.
+    :param max_velocity: velocity limit, rad/s or m/s, one or one per joint, > 0; inf: none.
+    :return: the limits in force, with a source per joint and bound.
+    :raises ValueError: wrong lengths, NaN, ``min_position`` of +inf or ``max_position`` of
+        -inf, ``max_velocity <= 0``, or a joint whose merged range is empty.
+    """
+    count = len(urdf.joints)
+    parameter_lower = _per_joint(min_position, 'min_position', count)
+    parameter_upper = _per_joint(max_position, 'max_position', count)
+    parameter_velocity = _per_joint(max_velocity, 'max_velocity', count)
+    if (parameter_lower == math.inf).any() or (parameter_upper == -math.inf).any():
+        raise ValueError('min_position cannot be +inf nor max_position -inf (use -inf and '
+                         '+inf respectively for no limit)')
+    if (parameter_velocity <= 0).any():
+        raise ValueError('max_velocity must be > 0 (inf: no limit)')
+
+    lower = np.maximum(urdf.lower, parameter_lower)
+    upper = np.minimum(urdf.upper, parameter_upper)
+    velocity = np.minimum(urdf.velocity, parameter_velocity)
+    lower_source = _sources(urdf.lower, parameter_lower, -math.inf, prefer_urdf=np.greater_equal)
+    upper_source = _sources(urdf.upper, parameter_upper, math.inf, prefer_urdf=np.less_equal)
+    velocity_source = _sources(urdf.velocity, parameter_velocity, math.inf,
+                               prefer_urdf=np.less_equal)
+    units = tuple('m' if kind == 'prismatic' else 'rad' for kind in urdf.types)
+    for index in np.flatnonzero(lower > upper):
+        unit = units[index]
+        raise ValueError(
+            f"joint '{urdf.joints[index]}' has no valid position: the URDF allows "
+            f'[{urdf.lower[index]:g}, {urdf.upper[index]:g}] {unit} and the parameters '
+            f'[{parameter_lower[index]:g}, {parameter_upper[index]:g}] {unit}')
+    return JointLimits(urdf.joints, PositionLimits(_frozen(lower), _frozen(upper),
+                                                   lower_source, upper_source),
+                       _frozen(velocity), velocity_source, units)
+
+
+def _sources(from_urdf: np.ndarray, from_parameter: np.ndarray, unlimited: float,
+             prefer_urdf: np.ufunc) -> tuple[str, ...]:
+    """Return per joint which bound is in force (the URDF's on a tie)."""
+    result = []
+    for urdf_value, parameter_value in zip(from_urdf, from_parameter, strict=True):
+        if urdf_value == unlimited and parameter_value == unlimited:
+            result.append(NONE)
+        elif prefer_urdf(urdf_value, parameter_value):
+            result.append(URDF)
+        else:
+            result.append(PARAMETER)
+    return tuple(result)
+
+
+def _origin(source: str, bound: str) -> str:
+    """Name where a bound came from: ``URDF``, the parameter's name, or ``none``."""
+    if source == PARAMETER:
+        return _PARAMETER_NAME[bound]
+    return _SOURCE_TEXT[source]
+
+
+def _describe_origin(source: str, bound: str) -> str:
+    """Name a bound's origin in a sentence: ``URDF`` or ``parameter max_position``."""
+    origin = _origin(source, bound)
+    return f'parameter {origin}' if source == PARAMETER else origin
+
+
+def describe_sources(limits: JointLimits) -> str:
+    """
+    Summarise the limits in force and their sources in one line (a log line, a status).
+
+    Example: ``joint_1: [-2.9, 2.9] rad (URDF), 2 rad/s (max_velocity); joint_2: position
+    unlimited, 3 rad/s (URDF); joint_3: [0, 0.4] m (lower URDF, upper max_position), …``.
+    """
+    parts = []
+    position = limits.position
+    for index, name in enumerate(limits.joints):
+        unit = limits.units[index]
+        lower = _origin(position.lower_source[index], 'lower')
+        upper = _origin(position.upper_source[index], 'upper')
+        if position.lower_source[index] == position.upper_source[index] == NONE:
+            text = 'position unlimited'
+        else:
+            origin = lower if lower == upper else f'lower {lower}, upper {upper}'
+            text = (f'[{position.lower[index]:.6g}, {position.upper[index]:.6g}] {unit} '
+                    f'({origin})')
+        if limits.velocity_source[index] == NONE:
+            text += ', velocity unlimited'
+        else:
+            text += (f', {limits.velocity[index]:.6g} {unit}/s '
+                     f"({_origin(limits.velocity_source[index], 'velocity')})")
+        parts.append(f'{name}: {text}')
+    return '; '.join(parts)
+
+
+def check_positions(names: Sequence[str], positions: Sequence[float], limits: JointLimits,
+                    what: str = 'goal position') -> str | None:
+    """
+    Check positions of named joints against their position limits.
+
+    :param names: joint names, any subset of ``limits.joints`` in any order.
+    :param positions: one position per name, rad or m.
+    :param limits: the limits in force (:func:`merge_limits`).
+    :param what: what the positions are, for the sentence (e.g. ``'via point 2 position'``).
+    :return: ``None`` when every position is within its range (bounds included); otherwise
+        one sentence for the first offending joint, naming it, the value, the valid range
+        and where the broken bound came from, e.g. ``goal position 3.2 rad for joint
+        'joint_2' is outside its range [-2.9, 2.9] rad (upper from URDF)``.
+    :raises ValueError: ``names`` and ``positions`` differ in length.
+    """
+    if len(names) != len(positions):
+        raise ValueError(f'{len(names)} names but {len(positions)} positions')
+    index_of = {name: index for index, name in enumerate(limits.joints)}
+    position = limits.position
+    for name, value in zip(names, positions, strict=True):
+        index = index_of.get(name)
+        if index is None:
+            return (f"{what} names joint '{name}', which has no limits; known joints: "
+                    f'{list(limits.joints)}')
+        unit = limits.units[index]
+        value = float(value)
+        if not math.isfinite(value):
+            return f"{what} {value:g} {unit} for joint '{name}' is not finite"
+        lower, upper = position.lower[index], position.upper[index]
+        if lower <= value <= upper:
+            continue
+        bound = 'lower' if value < lower else 'upper'
+        source = (position.lower_source if bound == 'lower' else position.upper_source)[index]
+        return (f"{what} {value:g} {unit} for joint '{name}' is outside its range "
+                f'[{lower:g}, {upper:g}] {unit} ({bound} from {_describe_origin(source, bound)})')
+    return None
