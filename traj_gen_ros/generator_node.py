@@ -28,12 +28,7 @@ import signal
 import sys
 import threading
 
-from rcl_interfaces.msg import (
-    FloatingPointRange,
-    ParameterDescriptor,
-    ParameterType,
-    SetParametersResult,
-)
+from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -45,24 +40,19 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from traj_gen_ros.answers import Answers
 from traj_gen_ros.motion_planning import held
-from traj_gen_ros.node_config import Config, initial_state, make_config, MAX_RATE_HZ, MIN_RATE_HZ
+from traj_gen_ros.node_config import Config, initial_state, make_config
+from traj_gen_ros.node_parameters import declare_parameters
 from traj_gen_ros.request_handler import REQUEST_DEPTH, RequestHandler
 from traj_gen_ros.stream import favour_calling_thread, Stream
 from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
-DEFAULT_JOINTS = [f'joint_{index}' for index in range(1, 7)]
 CONFIG_PARAMETERS = ('joints', 'rate_hz', 'profile', 'via_velocities', 'max_velocity',
                      'max_acceleration', 'lspb_acceleration')
-PER_JOINT = 'one value for all joints, or one per joint'
 #: The executor thread gets the GIL back to the stream thread this often (s).
 SWITCH_INTERVAL = 0.0001
 #: The spin loop checks this often (s) whether SIGINT/SIGTERM asked it to end.
 SIGNAL_POLL = 0.1
-
-
-def _descriptor(description: str, **extra: object) -> ParameterDescriptor:
-    return ParameterDescriptor(description=description, **extra)
 
 
 class TrajectoryGenerator(Node):
@@ -119,31 +109,7 @@ class TrajectoryGenerator(Node):
     # ------------------------------------------------------------------ parameters
 
     def _declare_parameters(self) -> None:
-        dynamic = {'dynamic_typing': True}
-        joints = self.declare_parameter('joints', DEFAULT_JOINTS, _descriptor(
-            'Joint names: the joint set and its order (read only).', read_only=True,
-            type=ParameterType.PARAMETER_STRING_ARRAY)).value
-        self.declare_parameter('initial_positions', [0.0] * len(joints or []), _descriptor(
-            'Start position per joint in rad (read only); empty means zeros.',
-            read_only=True, **dynamic))
-        self.declare_parameter('rate_hz', 100.0, _descriptor(
-            'JointState stream rate and sample rate of ~/trajectory, Hz.',
-            floating_point_range=[FloatingPointRange(
-                from_value=MIN_RATE_HZ, to_value=MAX_RATE_HZ)], **dynamic))
-        self.declare_parameter('profile', 'quintic', _descriptor(
-            'Profile of the next plans.', additional_constraints='cubic | quintic | lspb'))
-        self.declare_parameter('via_velocities', 'heuristic', _descriptor(
-            'Velocities at via points for cubic/quintic when none are given.',
-            additional_constraints='heuristic | continuous'))
-        self.declare_parameter('max_velocity', 1.0, _descriptor(
-            f'Velocity limit in rad/s, > 0: {PER_JOINT}. Used for timing; checked on '
-            'every plan.', **dynamic))
-        self.declare_parameter('max_acceleration', 2.0, _descriptor(
-            f'Acceleration limit in rad/s^2, > 0: {PER_JOINT}. Used for timing, checked '
-            'on every plan, and the braking rate of ~/stop.', **dynamic))
-        self.declare_parameter('lspb_acceleration', 0.0, _descriptor(
-            f'LSPB blend acceleration in rad/s^2, 0..max_acceleration: {PER_JOINT}; '
-            '0 means max_acceleration.', **dynamic))
+        declare_parameters(self)  # statically typed; numbers converted (node_parameters)
 
     def _parameter_values(self) -> dict[str, object]:
         return {name: self.get_parameter(name).value for name in CONFIG_PARAMETERS}
