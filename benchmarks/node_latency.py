@@ -64,7 +64,7 @@ def stamp_of(data: bytes) -> int:
 
 
 def bare_node(rate: float) -> None:
-    """The reference: a timer publishing the JointState; a goal is published at its next tick."""
+    """Run the reference: a timer publishing the JointState; a goal published at its next tick."""
     rclpy.init()
     node = Node('trajectory_generator')
     publisher = node.create_publisher(JointState, 'joint_states',
@@ -179,8 +179,10 @@ def goal_message(position: float) -> JointState:
 def send_and_time(recorder: Recorder, message, generator_node: bool = True
                   ) -> tuple[float, float, float | None]:
     """
-    Send ``message``; return ms from sending to the first new joint_states' stamp, to its
-    arrival here, and to the ~/trajectory's arrival (None for the bare node).
+    Send ``message``; return three latencies in ms.
+
+    From sending to the first new joint_states' stamp, to its arrival here, and to the
+    ~/trajectory's arrival (None for the bare node).
     """
     count = len(recorder.trajectories)
     first_state = len(recorder.states)
@@ -248,7 +250,7 @@ def long_plan(recorder: Recorder, repeats: int) -> dict:
 
 
 def periods(recorder: Recorder, seconds: float) -> dict:
-    """Stamp periods (ms) of joint_states over ``seconds``."""
+    """Return the intervals between joint_states stamps, in ms, over ``seconds``."""
     recorder.spin_until(lambda: len(recorder.states) > 50)
     begin = len(recorder.states)
     recorder.spin_for(seconds)

@@ -1,6 +1,7 @@
 """
-Exact state-to-state planning (issue 10): minimum time from any (q0, v0, a0), checked
-against Ruckig and against dense grids of shorter durations.
+Exact state-to-state planning (issue 10): minimum time from any (q0, v0, a0).
+
+Checked against Ruckig and against dense grids of shorter durations.
 """
 
 import math
