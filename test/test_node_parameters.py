@@ -40,7 +40,7 @@ class ParameterClient(Node):
         assert future.done(), client.srv_name
         return future.result()
 
-    def set(self, name: str, value: ParameterValue):
+    def set_value(self, name: str, value: ParameterValue):
         request = SetParameters.Request(parameters=[ParameterMsg(name=name, value=value)])
         return self.call(self.set_client, request).results[0]
 
@@ -85,24 +85,24 @@ def test_integers_given_at_start_up_are_stored_as_doubles(client):
 
 def test_an_integer_set_at_run_time_stays_a_double(client):
     # `ros2 param set /trajectory_generator rate_hz 50` sends an integer.
-    result = client.set('rate_hz', integer(60))
+    result = client.set_value('rate_hz', integer(60))
     assert result.successful, result.reason
     value = client.get('rate_hz')
     assert value.type == ParameterType.PARAMETER_DOUBLE and value.double_value == 60.0
     assert client.describe('rate_hz').type == ParameterType.PARAMETER_DOUBLE
     # Out of the declared range: refused by the range, the value stays.
-    refused = client.set('rate_hz', integer(5000))
+    refused = client.set_value('rate_hz', integer(5000))
     assert not refused.successful
     assert 'rate_hz out of range' in refused.reason and 'Max: 1000.0' in refused.reason
     assert client.get('rate_hz').double_value == 60.0
-    assert client.set('rate_hz', double(100.0)).successful
+    assert client.set_value('rate_hz', double(100.0)).successful
 
 
 def test_a_wrong_type_is_refused_and_the_type_stays(client):
-    refused = client.set('rate_hz', string('fast'))
+    refused = client.set_value('rate_hz', string('fast'))
     assert not refused.successful
     assert refused.reason == "Wrong parameter type, expected 'Type.DOUBLE' got 'Type.STRING'"
-    refused = client.set('max_velocity', string('fast'))
+    refused = client.set_value('max_velocity', string('fast'))
     assert not refused.successful and "expected 'Type.DOUBLE_ARRAY'" in refused.reason
     assert client.get('rate_hz').type == ParameterType.PARAMETER_DOUBLE
     assert client.describe('rate_hz').type == ParameterType.PARAMETER_DOUBLE
@@ -119,7 +119,7 @@ def test_a_wrong_type_is_refused_and_the_type_stays(client):
      [2.0, 2.0, 2.0, 3.0, 3.0, 3.0]),
 ])
 def test_a_per_joint_parameter_is_always_a_double_array(client, value, stored):
-    result = client.set('max_velocity', value)
+    result = client.set_value('max_velocity', value)
     assert result.successful, result.reason
     got = client.get('max_velocity')
     assert got.type == ParameterType.PARAMETER_DOUBLE_ARRAY

@@ -77,6 +77,7 @@ def test_every_refusal_is_specific_and_leaves_the_motion_untouched(probe):
         assert status.level == DiagnosticStatus.ERROR, label
         assert status.name == '/trajectory_generator'
         assert re.search(reason, status.message), (label, status.message)
+        assert not re.search(r'joint \d', status.message), status.message  # ROS names only
         assert trajectory is None
     assert len(probe.trajectories) == trajectories  # nothing new was planned
     # The stream followed the original plan all along, to the end.
@@ -105,6 +106,26 @@ def test_minimum_feasible_duration_is_feasible_and_tight(probe):
     assert ok.level == DiagnosticStatus.OK, ok.message
     assert trajectory_arrays(trajectory)[0][-1] == pytest.approx(minimum * 1.01, abs=1e-6)
     probe.wait_at_rest()
+
+
+@pytest.mark.parametrize('profile, points, reason', [
+    # The issue's reproducer: the core says `lspb: joint 2: acceleration 4 is too low`.
+    ('lspb', [(2.0, 0.5)], r"lspb: joint 'joint_3': acceleration 4 is too low to move"),
+    ('lspb', [(1.0, 0.5), (-1.0, 0.7), (0.0, 5.0)],
+     r"lspb_via: joint 'joint_3': .* with acceleration 4"),
+    ('quintic', [(1.0, 0.1)], r"joint 'joint_3' would reach acceleration"),
+])
+def test_refusals_name_joints_by_their_ros_names(probe, profile, points, reason):
+    probe.require_parameters(profile=profile)
+    try:
+        start = probe.wait_at_rest()[2]
+        status, _ = probe.request(via_message(['joint_3'], [
+            ([start + offset], time) for offset, time in points]))
+    finally:
+        probe.require_parameters(profile='quintic')
+    assert status.level == DiagnosticStatus.ERROR
+    assert re.search(reason, status.message), status.message
+    assert not re.search(r'joint \d', status.message), status.message
 
 
 @pytest.mark.parametrize('values, reason', [

@@ -41,6 +41,7 @@ from std_srvs.srv import Trigger
 from traj_gen_ros.answers import Answers
 from traj_gen_ros.motion_planning import held
 from traj_gen_ros.node_config import Config, initial_state, make_config
+from traj_gen_ros.node_limits import NodeLimits
 from traj_gen_ros.node_parameters import declare_parameters
 from traj_gen_ros.request_handler import REQUEST_DEPTH, RequestHandler
 from traj_gen_ros.stream import favour_calling_thread, Stream
@@ -62,6 +63,7 @@ class TrajectoryGenerator(Node):
         """Declare parameters, check them, and create the interface; ValueError if invalid."""
         super().__init__(NODE_NAME, **kwargs)
         self._declare_parameters()
+        self._limits = NodeLimits(self, lambda: self._apply_parameters([]))
         self._config = self._read_config()
         initial = initial_state(self._config.joints,
                                 self.get_parameter('initial_positions').value)
@@ -115,7 +117,7 @@ class TrajectoryGenerator(Node):
         return {name: self.get_parameter(name).value for name in CONFIG_PARAMETERS}
 
     def _read_config(self) -> Config:
-        return make_config(**self._parameter_values())
+        return self._limits.apply(make_config(**self._parameter_values()))
 
     def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         values = self._parameter_values()
