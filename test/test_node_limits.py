@@ -15,7 +15,7 @@ import sys
 import tempfile
 import textwrap
 
-from diagnostic_msgs.msg import DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from node_harness import (
     CONFIG,
     node_env,
@@ -158,6 +158,28 @@ def test_urdf_from_the_topic_limits_goals_via_points_and_plans(published_first):
         assert status.level == DiagnosticStatus.OK, (rest, status.message)
         probe.wait_at_rest()
         probe.require_parameters(max_acceleration=[4.0, 4.0, 4.0, 6.0, 6.0, 6.0])
+
+        # /diagnostics says where the limits came from; an invalid URDF on the topic is
+        # refused there and in the log, and the limits in force stay.
+        seen = []
+        probe.create_subscription(DiagnosticArray, '/diagnostics', seen.append, 10)
+
+        def diagnostics(condition):
+            def found():
+                values = [{kv.key: kv.value for kv in status.values} | {
+                    '': status.message, 'level': status.level}
+                    for array in seen for status in array.status]
+                return next((v for v in values if condition(v)), None)
+            return probe.spin_until(found, 15.0, 'a matching /diagnostics message')
+        values = diagnostics(lambda v: v['robot_description'] == 'topic /robot_description')
+        assert 'joint_1: [-1, 2] rad (URDF), 1.5 rad/s (URDF)' in values['limits']
+        update.publish(String(data='<robot name="broken"><joint name="x"/></robot>'))
+        values = diagnostics(lambda v: v['level'] == DiagnosticStatus.WARN)
+        assert values[''].startswith('robot_description on /robot_description refused: '
+                                     'invalid URDF'), values['']
+        wait_for_log(node, 'robot_description on /robot_description refused', probe)
+        status = goal_status(probe, {'joint_2': 2.5})
+        assert status.level == DiagnosticStatus.ERROR and 'upper from URDF' in status.message
         probe.destroy_publisher(update)
 
 

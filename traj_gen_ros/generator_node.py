@@ -38,9 +38,10 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
-from traj_gen_ros.answers import Answers
+from traj_gen_ros.diagnostics import RateMeter
 from traj_gen_ros.motion_planning import held
 from traj_gen_ros.node_config import Config, initial_state, make_config
+from traj_gen_ros.node_diagnostics import CountingAnswers, NodeDiagnostics
 from traj_gen_ros.node_limits import NodeLimits
 from traj_gen_ros.node_parameters import declare_parameters
 from traj_gen_ros.request_handler import REQUEST_DEPTH, RequestHandler
@@ -70,11 +71,13 @@ class TrajectoryGenerator(Node):
         joint_states = self.create_publisher(
             JointState, 'joint_states',
             QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+        self._rate_meter = RateMeter(self._now_ns() * 1e-9)  # for /diagnostics
         self._stream = Stream(held(initial), self._config.joints, self._now_ns,
-                              lambda: self._config.period_ns, joint_states.publish,
+                              lambda: self._config.period_ns,
+                              self._rate_meter.wrap(joint_states.publish),
                               self.get_logger().error)
         self.context.on_shutdown(self._stream.stopping.set)  # SIGINT/SIGTERM: stream ends
-        self._answers = Answers(self, lambda: self._config.joints)
+        self._answers = CountingAnswers(self, lambda: self._config.joints)
         self._requests = RequestHandler(lambda: self._config, self._stream, self._answers,
                                         self._now_ns, self.get_logger().error)
         self._goal_subscription = self.create_subscription(
@@ -86,6 +89,8 @@ class TrajectoryGenerator(Node):
         self.create_service(Trigger, '~/stop', self._on_stop)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
+        self._diagnostics = NodeDiagnostics(self, lambda: self._config, self._limits,
+                                            self._answers, self._rate_meter)
         self._answers.trajectory(0, held(initial), self._config.rate_hz)  # warm up
         priority = self._stream.start()
         self.get_logger().info(
