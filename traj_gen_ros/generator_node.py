@@ -10,7 +10,11 @@ service and the publishers; the work is done by
 * :mod:`traj_gen_ros.stream`: the thread that publishes the schedule's setpoint
   (:mod:`~traj_gen_ros.schedule`) every period;
 * :mod:`traj_gen_ros.answers`: ``~/status`` and ``~/trajectory``;
-* :mod:`traj_gen_ros.node_config`: parameters → a validated ``Config``.
+* :mod:`traj_gen_ros.node_config`: parameters → a validated ``Config``;
+  :mod:`~traj_gen_ros.node_parameters` declares them, statically typed;
+* :mod:`traj_gen_ros.node_limits`: the URDF and ``min_position``/``max_position`` → the
+  limits in force (``Config.limits``);
+* :mod:`traj_gen_ros.node_diagnostics`: ``/diagnostics`` about once a second.
 
 Interface (all names relative, so namespaces and remapping work):
 
@@ -20,6 +24,8 @@ Interface (all names relative, so namespaces and remapping work):
 * ``~/status`` (``diagnostic_msgs/DiagnosticStatus``): OK or ERROR with a reason, per request.
 * ``~/goal`` (``sensor_msgs/JointState``), ``~/via_points`` (``trajectory_msgs/JointTrajectory``).
 * ``~/stop`` (``std_srvs/Trigger``): brake within ``max_acceleration`` and hold.
+* ``robot_description`` (``std_msgs/String``, transient local): the robot's URDF, in.
+* ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): the node's health, about 1 Hz.
 """
 
 from __future__ import annotations

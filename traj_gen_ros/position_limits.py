@@ -167,6 +167,9 @@ def check_plan(limits: JointLimits, plan: Trajectory, start: Sequence[float]) ->
     :raises RequestError: e.g. ``the plan would take joint 'joint_2' to 2.95 rad, outside
         its range [-2.9, 2.9] rad (…): …``.
     """
+    if not (np.isfinite(limits.position.lower).any()
+            or np.isfinite(limits.position.upper).any()):
+        return  # no position limit at all: nothing to find
     lowest, highest = position_extrema(plan)
     start = np.asarray(start, dtype=float)
     for index in range(len(limits.joints)):
