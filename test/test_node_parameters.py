@@ -7,7 +7,7 @@ A real generator subprocess is driven from this process with the parameter servi
 
 import math
 
-from node_harness import running_node
+from node_harness import NodeProcess, running_node
 import pytest
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
@@ -153,3 +153,23 @@ def test_position_limits_default_to_none(client):
     lower, upper = client.get('min_position'), client.get('max_position')
     assert list(lower.double_array_value) == [-math.inf]
     assert list(upper.double_array_value) == [math.inf]
+
+
+@pytest.mark.parametrize('override, reason', [
+    ('rate_hz:=fast', "rate_hz must be a number (double); got 'fast' (a string)"),
+    ('min_position:=[a, b]', 'min_position must be a number or a list of numbers (one value '
+                             "for all joints or one per joint); got ['a', 'b'] (a list of "
+                             'strings)'),
+    ('profile:=3', 'profile must be a string; got 3 (an integer)'),
+])
+def test_a_wrong_type_at_start_up_exits_with_the_reason(override, reason):
+    # Without the config file: rcl drops a `-p` whose type differs from the file's value.
+    node = NodeProcess('-p', override, params_file=None)
+    try:
+        code = node.process.wait(30)
+        output = node.output()
+    finally:
+        node.close()
+    assert code == 1, output
+    assert f'invalid parameters: {reason}' in output, output
+    assert 'Traceback' not in output

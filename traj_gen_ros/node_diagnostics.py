@@ -80,7 +80,14 @@ class NodeDiagnostics:
         return self._limits_text[1]
 
     def publish(self) -> None:
-        """Publish one ``DiagnosticArray`` with the node's status."""
+        """Publish one ``DiagnosticArray`` with the node's status (a failure is logged)."""
+        try:
+            self._publish()
+        except Exception as error:  # noqa: BLE001 - diagnostics must not stop the node
+            self._node.get_logger().error(f'/diagnostics: {error!r}',
+                                          throttle_duration_sec=60.0)
+
+    def _publish(self) -> None:
         now = self._node.get_clock().now()
         config = self._config()
         level, message, values = node_status(

@@ -89,8 +89,8 @@ class NodeLimits:
         try:
             urdf = self._parse(message.data)
             self._merge(urdf, self._parameters())
-        except ValueError as error:
-            self.problem = f'robot_description on {topic} refused: {error}'
+        except Exception as error:  # noqa: BLE001 - no URDF may stop the node
+            self.problem = f'robot_description on {topic} refused: {_reason(error)}'
             self._node.get_logger().error(f'{self.problem}; the limits in force stay')
             return
         self._urdf = urdf
@@ -134,8 +134,8 @@ class NodeLimits:
             if 'robot_description' in names:
                 urdf = self._parse(values['robot_description'])
             self._merge(urdf, values)
-        except ValueError as error:
-            return SetParametersResult(successful=False, reason=str(error))
+        except Exception as error:  # noqa: BLE001 - no URDF may stop the node
+            return SetParametersResult(successful=False, reason=_reason(error))
         return SetParametersResult(successful=True)
 
     # ------------------------------------------------------------------ the limits in force
@@ -159,6 +159,11 @@ class NodeLimits:
             self._node.get_logger().info(f'joint limits (URDF: {self.source}): {summary}')
         return dataclasses.replace(config, max_velocity=np.array(limits.velocity),
                                    limits=limits)
+
+
+def _reason(error: Exception) -> str:
+    """Say why a URDF or limits were refused (a ValueError says it itself)."""
+    return str(error) if isinstance(error, ValueError) else f'{type(error).__name__}: {error}'
 
 
 def _one_or_all(values: Sequence[float]) -> float | np.ndarray:

@@ -43,6 +43,16 @@ DOUBLE_ARRAYS = ('initial_positions', 'max_velocity', 'max_acceleration', 'lspb_
 
 _DOUBLE = Parameter.Type.DOUBLE
 _DOUBLE_ARRAY = Parameter.Type.DOUBLE_ARRAY
+_TYPE_NAMES = {
+    ParameterType.PARAMETER_BOOL: 'a bool', ParameterType.PARAMETER_INTEGER: 'an integer',
+    ParameterType.PARAMETER_DOUBLE: 'a number (double)',
+    ParameterType.PARAMETER_STRING: 'a string',
+    ParameterType.PARAMETER_BYTE_ARRAY: 'a byte array',
+    ParameterType.PARAMETER_BOOL_ARRAY: 'a bool array',
+    ParameterType.PARAMETER_INTEGER_ARRAY: 'an integer array',
+    ParameterType.PARAMETER_DOUBLE_ARRAY: f'a number or a list of numbers ({PER_JOINT})',
+    ParameterType.PARAMETER_STRING_ARRAY: 'a list of strings',
+}
 _NUMBERS = (Parameter.Type.INTEGER, Parameter.Type.DOUBLE)
 _NUMBER_ARRAYS = (Parameter.Type.INTEGER_ARRAY, Parameter.Type.DOUBLE_ARRAY)
 
@@ -126,8 +136,8 @@ def declare_parameters(node: Node) -> None:
 
     An override (parameters file, ``-p``) is read first and converted with :func:`typed`,
     so ``rate_hz: 50`` in a file is the double 50.0; an empty per-joint array in a file
-    means the default. A value of another type makes the declaration raise
-    ``ParameterException`` (the node exits with status 1 and the reason).
+    means the default. A value of another type raises ``ValueError`` saying what the
+    parameter must be (the node exits with status 1 and the reason).
     """
     joints = node.declare_parameter('joints', DEFAULT_JOINTS, ParameterDescriptor(
         description='Joint names: the joint set and its order (read only).', read_only=True,
@@ -137,6 +147,9 @@ def declare_parameters(node: Node) -> None:
             name, None, ParameterDescriptor(dynamic_typing=True)))
         node.undeclare_parameter(name)
         value = given.value
+        if value is not None and given.type_.value != descriptor.type:
+            raise ValueError(f'{name} must be {_TYPE_NAMES[descriptor.type]}; got {value!r} '
+                             f'({_TYPE_NAMES.get(given.type_.value, given.type_.name)})')
         if value is None or (name in DOUBLE_ARRAYS and given.type_ == _DOUBLE_ARRAY
                              and len(value) == 0):
             value = default
