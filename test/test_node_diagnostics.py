@@ -60,9 +60,9 @@ def test_counts_and_motion_follow_the_requests(probe):
     assert after['accepted'] == before['accepted']
     accepted = int(after['accepted'])
     start = probe.wait_at_rest()
-    status, _ = probe.goal({'joint_4': start[3] + 5.0})  # about 3 s at 3 rad/s
+    status, _ = probe.goal({'joint_4': start[3] + 8.0})  # about 5 s at 3 rad/s
     assert status.level == DiagnosticStatus.OK
     _, moving = next_status(probe, lambda v: v['motion'].startswith('quintic, '))
     assert moving['motion'].endswith(' s left') and int(moving['accepted']) == accepted + 1
-    probe.wait_at_rest(timeout=15)
+    probe.wait_at_rest(timeout=20)
     next_status(probe, lambda v: v['motion'] == 'holding')
