@@ -145,19 +145,21 @@ def check_request(limits: JointLimits, request: GoalRequest | ViaRequest,
     :raises RequestError: e.g. ``goal position 3.2 rad for joint 'joint_2' is outside its
         range [-2.9, 2.9] rad (lower from URDF; upper from URDF)``.
     """
-    if isinstance(request, GoalRequest):
-        rows, what = [request.positions], ['goal position']
-    else:
-        rows = list(request.positions)
-        what = [f'via point {number} position' for number in range(len(rows))]
-    for row, label in zip(rows, what, strict=True):
-        for index, value in zip(request.joints, row, strict=True):
-            if abs(value - start[index]) <= START_TOLERANCE:
-                continue
-            if _outside(limits, int(index), float(value)):
-                raise RequestError(
-                    f'{label} {float(value):.6g} {limits.units[index]} for joint '
-                    f'{limits.joints[index]!r} is outside its range {_range(limits, index)}')
+    joints = np.asarray(request.joints, dtype=int)
+    rows = np.atleast_2d(np.asarray(request.positions, dtype=float))  # (points, named)
+    lower, upper = limits.position.lower[joints], limits.position.upper[joints]
+    slack = POSITION_TOLERANCE
+    outside = (rows < lower - slack * np.maximum(1.0, np.abs(lower))) | \
+        (rows > upper + slack * np.maximum(1.0, np.abs(upper)))
+    outside &= np.abs(rows - np.asarray(start, dtype=float)[joints]) > START_TOLERANCE
+    if not outside.any():
+        return
+    point, column = np.argwhere(outside)[0]  # the first point, then the first joint named
+    index, value = int(joints[column]), float(rows[point, column])
+    label = 'goal position' if isinstance(request, GoalRequest) else \
+        f'via point {point} position'
+    raise RequestError(f'{label} {value:.6g} {limits.units[index]} for joint '
+                       f'{limits.joints[index]!r} is outside its range {_range(limits, index)}')
 
 
 def check_plan(limits: JointLimits, plan: Trajectory, start: Sequence[float]) -> None:
