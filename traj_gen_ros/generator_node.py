@@ -10,7 +10,11 @@ service and the publishers; the work is done by
 * :mod:`traj_gen_ros.stream`: the thread that publishes the schedule's setpoint
   (:mod:`~traj_gen_ros.schedule`) every period;
 * :mod:`traj_gen_ros.answers`: ``~/status`` and ``~/trajectory``;
-* :mod:`traj_gen_ros.node_config`: parameters → a validated ``Config``.
+* :mod:`traj_gen_ros.node_config`: parameters → a validated ``Config``;
+  :mod:`~traj_gen_ros.node_parameters` declares them, statically typed;
+* :mod:`traj_gen_ros.node_limits`: the URDF and ``min_position``/``max_position`` → the
+  limits in force (``Config.limits``);
+* :mod:`traj_gen_ros.node_diagnostics`: ``/diagnostics`` about once a second.
 
 Interface (all names relative, so namespaces and remapping work):
 
@@ -20,6 +24,8 @@ Interface (all names relative, so namespaces and remapping work):
 * ``~/status`` (``diagnostic_msgs/DiagnosticStatus``): OK or ERROR with a reason, per request.
 * ``~/goal`` (``sensor_msgs/JointState``), ``~/via_points`` (``trajectory_msgs/JointTrajectory``).
 * ``~/stop`` (``std_srvs/Trigger``): brake within ``max_acceleration`` and hold.
+* ``robot_description`` (``std_msgs/String``, transient local): the robot's URDF, in.
+* ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): the node's health, about 1 Hz.
 """
 
 from __future__ import annotations
@@ -29,12 +35,7 @@ import signal
 import sys
 import threading
 
-from rcl_interfaces.msg import (
-    FloatingPointRange,
-    ParameterDescriptor,
-    ParameterType,
-    SetParametersResult,
-)
+from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -44,9 +45,12 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
-from traj_gen_ros.answers import Answers
+from traj_gen_ros.diagnostics import RateMeter
 from traj_gen_ros.motion_planning import held
-from traj_gen_ros.node_config import Config, initial_state, make_config, MAX_RATE_HZ, MIN_RATE_HZ
+from traj_gen_ros.node_config import Config, initial_state, make_config
+from traj_gen_ros.node_diagnostics import CountingAnswers, NodeDiagnostics
+from traj_gen_ros.node_limits import NodeLimits
+from traj_gen_ros.node_parameters import declare_parameters
 from traj_gen_ros.request_handler import REQUEST_DEPTH, RequestHandler
 from traj_gen_ros.stream import (
     EXECUTOR_FIFO_PRIORITY,
@@ -57,18 +61,12 @@ from traj_gen_ros.stream import (
 from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
-DEFAULT_JOINTS = [f'joint_{index}' for index in range(1, 7)]
 CONFIG_PARAMETERS = ('joints', 'rate_hz', 'profile', 'via_velocities', 'max_velocity',
                      'max_acceleration', 'lspb_acceleration')
-PER_JOINT = 'one value for all joints, or one per joint'
 #: The executor thread gets the GIL back to the stream thread this often (s).
 SWITCH_INTERVAL = 0.0001
 #: The spin loop checks this often (s) whether SIGINT/SIGTERM asked it to end.
 SIGNAL_POLL = 0.1
-
-
-def _descriptor(description: str, **extra: object) -> ParameterDescriptor:
-    return ParameterDescriptor(description=description, **extra)
 
 
 class TrajectoryGenerator(Node):
@@ -78,17 +76,20 @@ class TrajectoryGenerator(Node):
         """Declare parameters, check them, and create the interface; ValueError if invalid."""
         super().__init__(NODE_NAME, **kwargs)
         self._declare_parameters()
+        self._limits = NodeLimits(self, lambda: self._apply_parameters([]))
         self._config = self._read_config()
         initial = initial_state(self._config.joints,
                                 self.get_parameter('initial_positions').value)
         joint_states = self.create_publisher(
             JointState, 'joint_states',
             QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+        self._rate_meter = RateMeter(self._now_ns() * 1e-9)  # for /diagnostics
         self._stream = Stream(held(initial), self._config.joints, self._now_ns,
-                              lambda: self._config.period_ns, joint_states.publish,
+                              lambda: self._config.period_ns,
+                              self._rate_meter.wrap(joint_states.publish),
                               self.get_logger().error)
         self.context.on_shutdown(self._stream.stopping.set)  # SIGINT/SIGTERM: stream ends
-        self._answers = Answers(self, lambda: self._config.joints)
+        self._answers = CountingAnswers(self, lambda: self._config.joints)
         self._requests = RequestHandler(lambda: self._config, self._stream, self._answers,
                                         self._now_ns, self.get_logger().error)
         self._goal_subscription = self.create_subscription(
@@ -100,6 +101,8 @@ class TrajectoryGenerator(Node):
         self.create_service(Trigger, '~/stop', self._on_stop)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
+        self._diagnostics = NodeDiagnostics(self, lambda: self._config, self._limits,
+                                            self._answers, self._rate_meter)
         self._answers.trajectory(0, held(initial), self._config.rate_hz)  # warm up
         priority = self._stream.start()
         self.get_logger().info(
@@ -125,37 +128,13 @@ class TrajectoryGenerator(Node):
     # ------------------------------------------------------------------ parameters
 
     def _declare_parameters(self) -> None:
-        dynamic = {'dynamic_typing': True}
-        joints = self.declare_parameter('joints', DEFAULT_JOINTS, _descriptor(
-            'Joint names: the joint set and its order (read only).', read_only=True,
-            type=ParameterType.PARAMETER_STRING_ARRAY)).value
-        self.declare_parameter('initial_positions', [0.0] * len(joints or []), _descriptor(
-            'Start position per joint in rad (read only); empty means zeros.',
-            read_only=True, **dynamic))
-        self.declare_parameter('rate_hz', 100.0, _descriptor(
-            'JointState stream rate and sample rate of ~/trajectory, Hz.',
-            floating_point_range=[FloatingPointRange(
-                from_value=MIN_RATE_HZ, to_value=MAX_RATE_HZ)], **dynamic))
-        self.declare_parameter('profile', 'quintic', _descriptor(
-            'Profile of the next plans.', additional_constraints='cubic | quintic | lspb'))
-        self.declare_parameter('via_velocities', 'heuristic', _descriptor(
-            'Velocities at via points for cubic/quintic when none are given.',
-            additional_constraints='heuristic | continuous'))
-        self.declare_parameter('max_velocity', 1.0, _descriptor(
-            f'Velocity limit in rad/s, > 0: {PER_JOINT}. Used for timing; checked on '
-            'every plan.', **dynamic))
-        self.declare_parameter('max_acceleration', 2.0, _descriptor(
-            f'Acceleration limit in rad/s^2, > 0: {PER_JOINT}. Used for timing, checked '
-            'on every plan, and the braking rate of ~/stop.', **dynamic))
-        self.declare_parameter('lspb_acceleration', 0.0, _descriptor(
-            f'LSPB blend acceleration in rad/s^2, 0..max_acceleration: {PER_JOINT}; '
-            '0 means max_acceleration.', **dynamic))
+        declare_parameters(self)  # statically typed; numbers converted (node_parameters)
 
     def _parameter_values(self) -> dict[str, object]:
         return {name: self.get_parameter(name).value for name in CONFIG_PARAMETERS}
 
     def _read_config(self) -> Config:
-        return make_config(**self._parameter_values())
+        return self._limits.apply(make_config(**self._parameter_values()))
 
     def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         values = self._parameter_values()

@@ -28,6 +28,7 @@ from traj_gen_ros.blends import brake
 from traj_gen_ros.limits import JointError, limit_violation
 from traj_gen_ros.node_config import Config
 from traj_gen_ros.paths import plan_path
+from traj_gen_ros.position_limits import check_plan, check_request
 from traj_gen_ros.request_parsing import GoalRequest, MAX_DURATION, RequestError, ViaRequest
 from traj_gen_ros.timing import hold, min_time, shortest_duration
 from traj_gen_ros.trajectory import Trajectory
@@ -68,8 +69,12 @@ def plan_request(config: Config, state: State, hold_at: np.ndarray,
     Plan a parsed request from ``state``; joints it does not name go to ``hold_at``.
 
     ``hold_at`` is where the motion being replaced would have come to rest (rad).
-    Raises :class:`RequestError` with the reason when the request cannot be executed.
+    Raises :class:`RequestError` with the reason when the request cannot be executed,
+    also when a commanded position or the plan leaves the position limits in force
+    (``config.limits``, :mod:`traj_gen_ros.position_limits`).
     """
+    if config.limits is not None:
+        check_request(config.limits, request, state.position)
     try:
         if isinstance(request, GoalRequest):
             motion = plan_goal(config, state, hold_at, request)
@@ -77,7 +82,10 @@ def plan_request(config: Config, state: State, hold_at: np.ndarray,
             motion = plan_via(config, state, hold_at, request)
     except JointError as error:
         raise RequestError(error.named(config.joints)) from None
-    return check_size(motion, config)
+    motion = check_size(motion, config)
+    if config.limits is not None:
+        check_plan(config.limits, motion.plan, state.position)
+    return motion
 
 
 def plan_goal(config: Config, state: State, hold_at: np.ndarray,

@@ -14,8 +14,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from traj_gen_ros.joint_limits import JointLimits
 
 PROFILES = ('cubic', 'quintic', 'lspb')
 VIA_VELOCITIES = ('heuristic', 'continuous')
@@ -25,7 +29,12 @@ MAX_RATE_HZ = 1000.0
 
 @dataclass(frozen=True)
 class Config:
-    """Validated generator parameters; per-joint arrays have one entry per joint."""
+    """
+    Validated generator parameters; per-joint arrays have one entry per joint.
+
+    ``max_velocity`` is the tighter of the parameter and the URDF when ``limits`` are set
+    (:mod:`traj_gen_ros.node_limits`).
+    """
 
     joints: tuple[str, ...]
     rate_hz: float
@@ -34,6 +43,8 @@ class Config:
     max_velocity: np.ndarray
     max_acceleration: np.ndarray
     lspb_acceleration: np.ndarray
+    #: Position (and velocity) limits in force, with their sources; None: no position limits.
+    limits: JointLimits | None = None
 
     @property
     def profile_acceleration(self) -> np.ndarray:

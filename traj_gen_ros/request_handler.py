@@ -38,6 +38,7 @@ from rclpy.subscription import Subscription
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from traj_gen_ros.answers import Answers, Request
+from traj_gen_ros.limits import JointError
 from traj_gen_ros.motion_planning import (
     plan_request,
     plan_stop,
@@ -202,6 +203,9 @@ class RequestHandler:
                 motion = plan(config, state, hold_at)
             except RequestError as error:
                 self._answers.refused(request, str(error))
+                return None
+            except JointError as error:  # the core knows joints by index: name them
+                self._answers.refused(request, error.named(config.joints))
                 return None
             except Exception as error:  # noqa: BLE001 - a bad request must never kill the node
                 self._log_error(f'unexpected failure planning {request.kind}: {error!r}')

@@ -1,0 +1,96 @@
+"""traj_gen_ros.position_limits: exact position extrema of plans, refusals with names."""
+
+import math
+
+import numpy as np
+import pytest
+from traj_gen_ros import min_time
+from traj_gen_ros.blends import brake
+from traj_gen_ros.joint_limits import merge_limits, UrdfLimits
+from traj_gen_ros.paths import plan_path
+from traj_gen_ros.position_limits import check_plan, check_request, position_extrema
+from traj_gen_ros.request_parsing import GoalRequest, RequestError, ViaRequest
+from traj_gen_ros.timing import hold
+
+NAMES = ('shoulder', 'elbow', 'wrist')
+
+
+def limits(lower=-1.0, upper=1.0):
+    return merge_limits(UrdfLimits.unlimited(NAMES), min_position=lower, max_position=upper)
+
+
+def random_plans(count=150, seed=3):
+    rng = np.random.default_rng(seed)
+    v_max, a_max = np.full(3, 2.0), np.full(3, 4.0)
+    for _ in range(count):
+        profile = str(rng.choice(['cubic', 'quintic', 'lspb']))
+        points = rng.normal(size=(int(rng.integers(2, 7)), 3))
+        try:
+            if rng.random() < 0.5:
+                durations = None if profile == 'lspb' else rng.uniform(0.3, 2.0, len(points) - 1)
+                yield plan_path(points, durations, profile, max_velocity=v_max,
+                                max_acceleration=a_max, blend_acceleration=a_max)
+            else:
+                yield min_time(points[0], points[1], v_max, a_max, profile,
+                               v0=rng.normal(size=3),
+                               a0=rng.normal(size=3) if profile == 'quintic' else 0.0)
+        except ValueError:
+            continue
+
+
+def test_extrema_bound_every_sample_and_are_reached():
+    for plan in random_plans():
+        lowest, highest = position_extrema(plan)
+        q = plan.sample(np.linspace(0.0, plan.duration, 100_001))[0]
+        step = plan.duration / 100_000
+        # Exact: no sample beyond them; dense samples come within v_max * step of them.
+        assert np.all(q.min(axis=0) >= lowest - 1e-12)
+        assert np.all(q.max(axis=0) <= highest + 1e-12)
+        assert np.all(q.min(axis=0) - lowest <= 2.0 * step + 1e-12)
+        assert np.all(highest - q.max(axis=0) <= 2.0 * step + 1e-12)
+
+
+def test_extrema_of_holds_and_brakes():
+    lowest, highest = position_extrema(hold(np.array([0.5, -0.25])))
+    assert lowest.tolist() == [0.5, -0.25] and highest.tolist() == [0.5, -0.25]
+    lowest, highest = position_extrema(brake(np.zeros(2), np.array([1.0, -2.0]),
+                                             np.full(2, 2.0)))
+    assert lowest.tolist() == [0.0, -1.0] and highest.tolist() == [0.25, 0.0]
+
+
+def test_a_moving_start_that_must_brake_past_the_target_is_refused():
+    # From 0.6 rad at 2 rad/s, braking at 4 rad/s^2 needs at least 0.5 rad: past 1.
+    start = np.array([0.6, 0.0, 0.0])
+    plan = min_time(start, np.array([0.8, 0.0, 0.0]), np.full(3, 2.0), np.full(3, 4.0),
+                    'quintic', v0=np.array([2.0, 0.0, 0.0]))
+    assert position_extrema(plan)[1][0] > 1.1
+    with pytest.raises(RequestError, match=r"the plan would take joint 'shoulder' to 1\.[0-9]+ "
+                                           r'rad, outside its range \[-1, 1\] rad \(lower from '
+                                           r'parameter min_position; upper from parameter '
+                                           r'max_position\)'):
+        check_plan(limits(), plan, start)
+
+
+def test_a_start_outside_the_range_may_come_back_but_not_go_further():
+    back = min_time(np.array([1.5, 0, 0]), np.array([0.5, 0, 0]), np.full(3, 2.0),
+                    np.full(3, 4.0), 'quintic')
+    check_plan(limits(), back, [1.5, 0.0, 0.0])
+    further = min_time(np.array([1.5, 0, 0]), np.array([1.5, 0, 0]), np.full(3, 2.0),
+                       np.full(3, 4.0), 'quintic', v0=np.array([0.5, 0, 0]))
+    with pytest.raises(RequestError, match="joint 'shoulder'"):
+        check_plan(limits(), further, [1.5, 0.0, 0.0])
+
+
+def test_commanded_positions_outside_the_range_are_refused_by_name():
+    goal = GoalRequest(np.array([2]), np.array([1.25]))
+    with pytest.raises(RequestError, match=r"goal position 1\.25 rad for joint 'wrist' is "
+                                           r'outside its range \[-1, 1\] rad'):
+        check_request(limits(), goal, np.zeros(3))
+    via = ViaRequest(np.array([1, 0]), np.array([1.0, 2.0]),
+                     np.array([[0.5, 0.5], [0.9, -1.5]]), None, None, False)
+    with pytest.raises(RequestError, match="via point 1 position -1.5 rad for joint 'shoulder'"):
+        check_request(limits(), via, np.zeros(3))
+    check_request(limits(), GoalRequest(np.array([0]), np.array([1.0])), np.zeros(3))
+    # A joint already outside may be told to stay where it is.
+    check_request(limits(), GoalRequest(np.array([0]), np.array([3.0])), [3.0, 0.0, 0.0])
+    check_request(limits(-math.inf, math.inf), goal, np.zeros(3))
