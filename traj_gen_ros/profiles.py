@@ -23,6 +23,7 @@ from traj_gen_ros.polynomial import (
     quintic,
     quintic_via,
 )
+from traj_gen_ros.scurve_brake import scurve_brake
 from traj_gen_ros.scurve_move import scurve
 from traj_gen_ros.scurve_path import scurve_via
 from traj_gen_ros.timing import hold, min_time, PROFILES, via_durations
@@ -49,6 +50,7 @@ __all__ = [
     'quintic',
     'quintic_via',
     'scurve',
+    'scurve_brake',
     'scurve_via',
     'Violation',
     'via_durations',
