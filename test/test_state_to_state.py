@@ -277,3 +277,18 @@ def test_lspb_sampling_is_linear_in_joints():
     np.testing.assert_array_equal(position[0], q0)
     np.testing.assert_allclose(position[-1], qf, atol=1e-12)
     np.testing.assert_allclose(velocity[-1], 0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize('joints', [3, 40])
+def test_dense_and_sparse_sampling_of_per_joint_pieces_agree(joints):
+    # Dense sampling of a few joints merges their breakpoints (one product per piece);
+    # otherwise each sample's piece is gathered per joint. Both must give the same states.
+    rng = np.random.default_rng(joints)
+    q0, qf = rng.uniform(-1, 1, joints), rng.uniform(-1, 1, joints)
+    plan = min_time(q0, qf, 1.0, 2.0, 'lspb', v0=rng.uniform(-0.5, 0.5, joints))
+    times = np.linspace(0.0, plan.duration, 4001)
+    dense = plan.sample(times)
+    sparse = [plan.sample(times[index:index + 7]) for index in range(0, times.size, 7)]
+    for order in range(3):
+        np.testing.assert_allclose(dense[order], np.vstack([s[order] for s in sparse]),
+                                   rtol=1e-12, atol=1e-12)

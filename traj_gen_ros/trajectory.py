@@ -11,6 +11,7 @@ Units: seconds for time, radians (or metres) for position.
 from __future__ import annotations
 
 from functools import cached_property
+import math
 
 import numpy as np
 
@@ -19,6 +20,8 @@ _PEAK_NEWTON_STEPS = 8
 # Samples per piece above which each piece is evaluated as one matrix product.
 _SAMPLES_PER_PIECE_FOR_MATMUL = 16
 _SAMPLES_PER_PRODUCT = 4096  # keeps each product's operands in cache
+# Dense sampling merges per-joint breakpoints (joints² work) up to this many joints.
+_JOINTS_FOR_MERGING = 16
 # Per-joint breakpoints up to this many are compared at once; more use searchsorted.
 _PIECES_FOR_COMPARISON = 16
 
@@ -69,9 +72,11 @@ class Trajectory:
             raise ValueError(f'times must be finite: sample {np.argmin(np.isfinite(times))} '
                              f'is {times[np.argmin(np.isfinite(times))]}')
         times = np.clip(times, 0.0, self.duration)
-        if self.breakpoints.ndim == 2:
+        dense = times.size >= _SAMPLES_PER_PIECE_FOR_MATMUL * self.breakpoints.size
+        if self.breakpoints.ndim == 2 and not (dense and
+                                               self.joint_count <= _JOINTS_FOR_MERGING):
             return self._sample_per_joint(times)
-        breakpoints, coefficients = self.breakpoints, self.coefficients
+        breakpoints, coefficients = self._shared_pieces
         if times.size < _SAMPLES_PER_PIECE_FOR_MATMUL * len(coefficients):
             piece = np.searchsorted(breakpoints[1:-1], times, side='right')
             local_time = (times - breakpoints[piece])[:, None]
@@ -142,9 +147,39 @@ class Trajectory:
         return states[0], states[1], states[2]
 
     @cached_property
+    def _shared_pieces(self) -> tuple[np.ndarray, np.ndarray]:
+        """
+        Give breakpoints shared by every joint, ``(pieces + 1,)``, with coefficients on them.
+
+        Per-joint breakpoints (LSPB, S-curve) are merged into their union and each joint's
+        polynomial is re-expanded about the start of every union interval (Taylor shift:
+        ``c'_k = Σ_m C(m, k) c_m d^(m-k)``). This costs joints² × pieces, so it serves only
+        dense sampling of a few joints (``_JOINTS_FOR_MERGING``), where one matrix product
+        per union piece beats gathering every sample's coefficients.
+        """
+        if self.breakpoints.ndim == 1:
+            return self.breakpoints, self.coefficients
+        union = np.unique(self.breakpoints)
+        if union.size == 1:  # zero duration: one zero-length piece, each joint's last
+            union = np.repeat(union, 2)
+        starts = union[:-1]
+        joints = np.arange(self.joint_count)
+        piece = np.empty((starts.size, self.joint_count), dtype=np.intp)
+        for joint in joints:
+            piece[:, joint] = np.searchsorted(self.breakpoints[1:-1, joint], starts, 'right')
+        offset = starts[:, None] - self.breakpoints[piece, joints]
+        source = self.coefficients[piece, :, joints].transpose(0, 2, 1)
+        shifted = np.zeros_like(source)
+        for power in range(self.degree + 1):
+            for higher in range(power, self.degree + 1):
+                shifted[:, power] += (math.comb(higher, power) * source[:, higher]
+                                      * offset ** (higher - power))
+        return union, shifted
+
+    @cached_property
     def _state_tables(self) -> np.ndarray:
         """Position, velocity, acceleration coefficients, ``(pieces, 3, n + 1, joints)``."""
-        coefficients = self.coefficients
+        coefficients = self._shared_pieces[1]
         tables = np.zeros((len(coefficients), 3) + coefficients.shape[1:])
         derivative = coefficients
         for order in range(3):
@@ -154,7 +189,7 @@ class Trajectory:
 
     def _sample_sorted(self, times: np.ndarray) -> np.ndarray:
         """Evaluate ascending ``times`` piece by piece: ``(3, samples, joints)``."""
-        breakpoints = self.breakpoints
+        breakpoints = self._shared_pieces[0]
         states = np.zeros((3, times.size, self.joint_count))
         edges = np.searchsorted(times, breakpoints, side='left')
         edges[0], edges[-1] = 0, times.size
