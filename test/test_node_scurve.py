@@ -60,13 +60,13 @@ def mean_accelerations(times: np.ndarray, velocities: np.ndarray):
 
 
 def acceleration_steps(centres: np.ndarray, accelerations: np.ndarray) -> np.ndarray:
-    """Each change of the mean acceleration minus what ``MAX_JERK`` allows; > 0 is a step."""
+    """Return each change of mean acceleration minus what ``MAX_JERK`` allows (> 0: a step)."""
     allowed = MAX_JERK * np.diff(centres)[:, None] * SAMPLING + ACCELERATION_SLACK
     return np.abs(np.diff(accelerations, axis=0)) - allowed
 
 
 def assert_jerk_limited(probe, start_ns: int):
-    """The stream from ``start_ns``: within the velocity/acceleration limits, jerk bounded."""
+    """Check the stream from ``start_ns``: within velocity/acceleration limits, jerk bounded."""
     times, positions, velocities = probe.states_between(start_ns)
     assert len(times) > 10
     assert np.all(np.diff(times) > 0)

@@ -116,11 +116,16 @@ def plan_goal(config: Config, state: State, hold_at: np.ndarray,
         raise RequestError(f'cannot plan the goal with profile {config.profile}{moving}: '
                            f'{reason}') from None
     # As in the core: a start already at (or, after limits were lowered, beyond) a limit
-    # may stay at that level while it slows down.
+    # may stay at that level while it slows down. With bounded jerk the velocity goes on
+    # by a0 |a0| / (2 max_jerk) while the acceleration returns to zero: unavoidable too.
     a_limit = config.profile_acceleration
+    v_limit = np.maximum(config.max_velocity, np.abs(velocity))
+    if config.jerk_limit is not None:
+        v_limit = np.maximum(v_limit, np.abs(
+            velocity + acceleration * np.abs(acceleration) / (2.0 * config.jerk_limit)))
     violation = limit_violation(
-        plan, np.maximum(config.max_velocity, np.abs(velocity)),
-        np.maximum(a_limit, np.abs(acceleration)) if keeps else a_limit, config.jerk_limit)
+        plan, v_limit, np.maximum(a_limit, np.abs(acceleration)) if keeps else a_limit,
+        config.jerk_limit)
     if violation is not None:
         raise RequestError('the minimum-time plan breaks a limit: '
                            f'{violation.describe(config.joints)}')
