@@ -112,6 +112,34 @@ def moving_state() -> None:
                    'µs', f'<= {target:g} µs ({verdict})')
 
 
+def scurve_moving_state() -> None:
+    print('== jerk-limited S-curve (issue 12): 6-joint min-time plan from a moving state, µs')
+    rng = np.random.default_rng(12)
+    start, goal = rng.uniform(-1.0, 1.0, JOINTS), rng.uniform(-1.0, 1.0, JOINTS)
+    limits = (MAX_VELOCITY, MAX_ACCELERATION, 10.0 * MAX_ACCELERATION)
+    velocity = rng.uniform(-0.5, 0.5, JOINTS) * MAX_VELOCITY
+    acceleration = rng.uniform(-0.5, 0.5, JOINTS) * MAX_ACCELERATION
+    planner, request = ruckig.Ruckig(JOINTS), ruckig.InputParameter(JOINTS)
+    request.current_position, request.target_position = start.tolist(), goal.tolist()
+    request.current_velocity = velocity.tolist()
+    request.current_acceleration = acceleration.tolist()
+    request.max_velocity, request.max_acceleration, request.max_jerk = (
+        limit.tolist() for limit in limits)
+    trajectory = ruckig.Trajectory(JOINTS)
+    planner.calculate(request, trajectory)
+    ruckig_us = seconds_per_call(lambda: planner.calculate(request, trajectory)) * 1e6
+
+    def plan():
+        return tg.min_time(start, goal, limits[0], limits[1], 'scurve', v0=velocity,
+                           a0=acceleration, max_jerk=limits[2])
+
+    assert abs(plan().duration - trajectory.duration) <= 1e-9 * trajectory.duration
+    us = seconds_per_call(plan) * 1e6
+    verdict = 'met' if us <= 100.0 else 'MISSED'
+    report('min_time(..., "scurve") from v0, a0', us, 'ruckig', ruckig_us, 'µs',
+           f'<= 100 µs ({verdict})')
+
+
 def via_spline() -> None:
     print('== 6-joint, 20-via-point "continuous" cubic: plan + sample pos/vel/acc at 1 kHz')
     rng = np.random.default_rng(7)
@@ -180,6 +208,7 @@ def node_latency() -> None:
 if __name__ == '__main__':
     planning()
     moving_state()
+    scurve_moving_state()
     via_spline()
     sampling()
     node_latency()

@@ -397,6 +397,8 @@ def minimum_duration(profile: str, displacement: np.ndarray, start_velocity: np.
             return None, None
         duration = found
         rest = order[np.isin(order, list(analysed), invert=True)]
+        if not rest.size:
+            return duration, None
         # Joints whose lower bound exceeds the duration bind: analyse them first.
         binding = rest[bounds[rest] > duration]
         if binding.size:

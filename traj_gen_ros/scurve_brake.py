@@ -64,8 +64,8 @@ def _pieces(start: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray,
     for phase in range(3):
         coefficients[phase] = position, velocity, 0.5 * acceleration, jerks[phase] / 6.0
         time = lengths[phase]
-        position = position + time * (velocity + time * (
-            0.5 * acceleration + time * jerks[phase] / 6.0))
+        cubic_term = time * jerks[phase] / 6.0
+        position = position + time * (velocity + time * (0.5 * acceleration + cubic_term))
         velocity = velocity + time * (acceleration + 0.5 * time * jerks[phase])
         acceleration = acceleration + time * jerks[phase]
         breakpoints[phase + 1] = breakpoints[phase] + time
