@@ -108,10 +108,10 @@ def test_scurve_goal_streams_the_min_time_plan_within_every_limit(probe, rest):
     stream_exp_q, stream_exp_v, _ = plan.sample(stream_t[moving])
     assert np.allclose(stream_q[moving], stream_exp_q, atol=1e-9)
     assert np.allclose(stream_v[moving], stream_exp_v, atol=1e-9)
+    # From the plan's duration on (min_time's, to 1e-9 above) the stream holds the target:
+    # no timing bound on when the samples came, only what they say.
+    assert np.count_nonzero(~moving) >= 10
     assert np.all(stream_q[~moving] == target) and not np.any(stream_v[~moving])
-    # The stream moves for the plan's duration: its last moving sample is within a period
-    # of the end only if the machine kept up, so only the order is asserted here.
-    assert stream_t[moving][-1] < plan.duration <= stream_t[~moving][0]
     _, _, centres, estimated = assert_jerk_limited(probe, start_ns - int(0.1e9))
     jerk = np.abs(np.diff(estimated, axis=0)) / np.diff(centres)[:, None]
     assert np.max(jerk / MAX_JERK) > 0.5  # the estimate sees the jerk phases
