@@ -9,9 +9,9 @@ accepted. The same case becomes ``planning`` arguments or a ROS message.
 Commanded range (the envelope every published position must stay in), per joint:
 
 * goal, or ``lspb`` via points, starting at rest: the hull of the start position and the
-  commanded positions (rest-to-rest cubic/quintic/LSPB are monotonic; Craig's LSPB blends
-  round corners inside the hull of the via points). Exact.
-* cubic/quintic via points (splines may overshoot between points): on each segment
+  commanded positions (rest-to-rest cubic/quintic/LSPB/S-curve are monotonic; Craig's LSPB
+  blends round corners inside the hull of the via points). Exact.
+* cubic/quintic/S-curve via points (splines may overshoot between points): on each segment
   ``[t_i, t_i+1]`` the hull of its two points widened by ``v_max * (t_i+1 - t_i) / 2``.
   Sound because the spline passes through both points and never exceeds ``v_max``.
 * a start that is moving, or via points whose segment times are unknown: the hull of the
@@ -28,12 +28,13 @@ import numpy as np
 JOINTS = [f'joint_{index}' for index in range(1, 7)]
 MAX_VELOCITY = np.array([2.0, 2.0, 2.0, 3.0, 3.0, 3.0])
 MAX_ACCELERATION = np.array([4.0, 4.0, 4.0, 6.0, 6.0, 6.0])
-PROFILES = ('cubic', 'quintic', 'lspb')
+PROFILES = ('cubic', 'quintic', 'lspb', 'scurve')
 
 NON_FINITE = r'is (nan|inf|-inf): every value must be finite'
 LIMIT_REASON = (r'above max_|minimum feasible duration|no uniform stretch|breaks a limit|'
                 r'cannot plan|cannot time|above the limit of|non-finite|samples on|'
-                r'cannot leave|blend|too short|does not fit|profile lspb|profile cubic')
+                r'cannot leave|blend|too short|does not fit|profile lspb|profile cubic|'
+                r'profile scurve|scurve_via')
 
 
 @dataclass

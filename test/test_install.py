@@ -78,8 +78,8 @@ def test_generator_script_starts_the_node(tmp_path):
     finally:
         node.close()
     assert code == 1, output
-    assert "invalid parameters: profile must be one of cubic, quintic, lspb; got 'septic'" \
-        in output
+    assert ('invalid parameters: profile must be one of lspb, cubic, quintic, scurve; '
+            "got 'septic'") in output
     assert 'Traceback' not in output
 
 

@@ -50,7 +50,7 @@ def test_sigterm_ends_cleanly():
 
 
 @pytest.mark.parametrize('override, reason', [
-    ('profile:=septic', "profile must be one of cubic, quintic, lspb; got 'septic'"),
+    ('profile:=septic', "profile must be one of lspb, cubic, quintic, scurve; got 'septic'"),
     ('max_velocity:=[1.0, 2.0]', 'max_velocity has 2 values but there are 6 joints'),
     ('initial_positions:=[0.0]', 'initial_positions has 1 values but joints has 6'),
 ])

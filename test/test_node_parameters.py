@@ -17,8 +17,8 @@ from rclpy.node import Node
 
 GENERATOR = '/trajectory_generator'
 SCALARS = ('rate_hz',)
-PER_JOINT = ('max_velocity', 'max_acceleration', 'lspb_acceleration', 'min_position',
-             'max_position')
+PER_JOINT = ('max_velocity', 'max_acceleration', 'lspb_acceleration', 'max_jerk',
+             'min_position', 'max_position')
 RULE = 'one value for all joints or one per joint'
 
 
@@ -140,13 +140,40 @@ def test_describe_shows_every_range_and_rule(client):
         assert descriptor.type == ParameterType.PARAMETER_DOUBLE_ARRAY, name
         assert RULE in descriptor.description and RULE in descriptor.additional_constraints
         assert 'rad' in descriptor.additional_constraints, name
-    for name, choices in (('profile', 'cubic | quintic | lspb'),
+    for name, choices in (('profile', 'lspb | cubic | quintic | scurve'),
                           ('via_velocities', 'heuristic | continuous')):
         descriptor = client.describe(name)
         assert descriptor.type == ParameterType.PARAMETER_STRING
         assert descriptor.additional_constraints == choices
     assert client.describe('joints').read_only
     assert client.describe('robot_description').type == ParameterType.PARAMETER_STRING
+
+
+def test_max_jerk_is_set_at_run_time_and_refused_unless_positive(client):
+    # `ros2 param set /trajectory_generator max_jerk 30` sends an integer: stored as [30.0].
+    result = client.set_value('max_jerk', integer(30))
+    assert result.successful, result.reason
+    got = client.get('max_jerk')
+    assert got.type == ParameterType.PARAMETER_DOUBLE_ARRAY
+    assert list(got.double_array_value) == [30.0]
+    per_joint = ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY,
+                               double_array_value=[10.0, 10.0, 10.0, 40.0, 40.0, 40.0])
+    assert client.set_value('max_jerk', per_joint).successful
+    for value, reason in ((double(0.0), 'max_jerk[0] = 0.0: every value must be finite and '
+                                        'positive'),
+                          (integer(-5), 'max_jerk[0] = -5.0: every value must be finite and '
+                                        'positive'),
+                          (ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY,
+                                          double_array_value=[1.0, 2.0]),
+                           'max_jerk has 2 values but there are 6 joints')):
+        refused = client.set_value('max_jerk', value)
+        assert not refused.successful
+        assert reason in refused.reason, refused.reason
+        # The value stays.
+        assert list(client.get('max_jerk').double_array_value) == [10.0, 10.0, 10.0, 40.0,
+                                                                   40.0, 40.0]
+    assert 'rad/s^3' in client.describe('max_jerk').additional_constraints
+    assert client.set_value('max_jerk', double(20.0)).successful
 
 
 def test_position_limits_default_to_none(client):

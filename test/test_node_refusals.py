@@ -129,7 +129,7 @@ def test_refusals_name_joints_by_their_ros_names(probe, profile, points, reason)
 
 
 @pytest.mark.parametrize('values, reason', [
-    ({'profile': 'septic'}, "profile must be one of cubic, quintic, lspb; got 'septic'"),
+    ({'profile': 'septic'}, "profile must be one of lspb, cubic, quintic, scurve; got 'septic'"),
     ({'via_velocities': 'smooth'}, 'via_velocities must be one of heuristic, continuous'),
     ({'max_velocity': -1.0}, r'max_velocity\[0\] = -1.0: every value must be finite and positive'),
     ({'max_velocity': [1.0, 2.0]}, 'max_velocity has 2 values but there are 6 joints'),

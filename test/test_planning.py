@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 import numpy as np
 import pytest
 from rclpy.serialization import serialize_message
-from traj_gen_ros import min_time
+from traj_gen_ros import limit_violation, min_time, scurve_brake
 from traj_gen_ros.motion_planning import (
     held,
     plan_request,
@@ -59,6 +59,9 @@ def test_config_broadcasts_and_replaces_zero_lspb_acceleration():
     ({'max_velocity': [1.0, math.nan, 1.0]}, r'max_velocity\[1\] = nan'),
     ({'max_acceleration': [1.0, 2.0]}, 'has 2 values but there are 3 joints'),
     ({'lspb_acceleration': -1.0}, 'must be finite and non-negative'),
+    ({'max_jerk': 0.0}, r'max_jerk\[0\] = 0.0: every value must be finite and positive'),
+    ({'max_jerk': [1.0, -2.0, 1.0]}, r'max_jerk\[1\] = -2.0'),
+    ({'profile': 'septic'}, 'profile must be one of lspb, cubic, quintic, scurve'),
 ])
 def test_config_errors_name_the_parameter(changes, reason):
     with pytest.raises(ValueError, match=reason):
@@ -138,6 +141,67 @@ def test_stop_brakes_at_the_limit_to_rest():
     q, v, a = motion.plan.sample(np.array([0.0, 0.25, 0.5, 1.0]))
     assert q[0].tolist() == [0.0, 1.0, 2.0] and v[0].tolist() == [2.0, -1.0, 0.0]
     assert np.all(np.abs(a) <= 4.0) and not v[-1].any()
+
+
+def test_scurve_goal_starts_from_the_acceleration_within_every_limit():
+    cfg = config(profile='scurve', max_jerk=[10.0, 20.0, 30.0])
+    assert cfg.max_jerk.tolist() == [10.0, 20.0, 30.0] and cfg.jerk_limit is cfg.max_jerk
+    assert config().jerk_limit is None  # the other profiles are not checked for jerk
+    state = State(np.zeros(3), np.array([0.5, -1.0, 0.0]), np.array([2.0, 1.0, -3.0]))
+    motion = plan_request(cfg, state, np.zeros(3), GoalRequest(np.arange(3),
+                                                               np.array([1.0, -1.0, 0.5])))
+    assert motion.profile == 'scurve'
+    q, v, a = (value[0] for value in motion.plan.sample(0.0))
+    assert q.tolist() == [0.0] * 3 and v.tolist() == state.velocity.tolist()
+    assert a == pytest.approx(state.acceleration, abs=1e-9)  # no acceleration step
+    expected = min_time(state.position, [1.0, -1.0, 0.5], cfg.max_velocity,
+                        cfg.max_acceleration, 'scurve', v0=state.velocity,
+                        a0=state.acceleration, max_jerk=cfg.max_jerk)
+    assert motion.plan.duration == pytest.approx(expected.duration, rel=1e-12)
+    assert limit_violation(motion.plan, cfg.max_velocity, cfg.max_acceleration,
+                           cfg.max_jerk) is None
+
+
+def test_scurve_goal_from_the_velocity_limit_while_accelerating_is_accepted():
+    # Limits lowered mid-motion: at 1 rad/s (the limit) and +2 rad/s^2 the velocity must
+    # go on to 1 + 2^2 / (2 * 10) = 1.2 rad/s while the acceleration returns to zero.
+    cfg = config(profile='scurve', max_jerk=10.0)
+    state = State(np.zeros(3), np.array([1.0, 0.0, 0.0]), np.array([2.0, 0.0, 0.0]))
+    motion = plan_request(cfg, state, np.zeros(3), GoalRequest(np.array([0]),
+                                                               np.array([3.0])))
+    velocity, acceleration, jerk = motion.plan.peaks()
+    assert velocity[0] == pytest.approx(1.2, rel=1e-6)
+    assert acceleration[0] <= 4.0 * (1 + 1e-9) and jerk[0] <= 10.0 * (1 + 1e-9)
+
+
+def test_scurve_via_points_refuse_accelerations_and_time_from_the_limits():
+    cfg = config(profile='scurve', max_jerk=10.0)
+    with pytest.raises(RequestError, match='profile scurve cannot honour accelerations'):
+        plan_request(cfg, rest(), np.zeros(3), parse_via(
+            JOINTS, ['a'], [([0.5], [0.0], [0.0], 1.0)]))
+    moving = State(np.zeros(3), np.array([0.5, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]))
+    motion = plan_request(cfg, moving, np.zeros(3), parse_via(
+        JOINTS, ['a', 'b'], [([0.5, 0.2], [], [], 0.0), ([1.0, -0.3], [], [], 0.0)]))
+    assert motion.note == 'timed from the limits'
+    a0 = motion.plan.sample(0.0)[2][0]
+    assert a0 == pytest.approx(moving.acceleration, abs=1e-9)
+    assert limit_violation(motion.plan, cfg.max_velocity, cfg.max_acceleration,
+                           cfg.max_jerk) is None
+
+
+def test_scurve_stop_brakes_with_bounded_jerk_from_the_acceleration():
+    cfg = config(profile='scurve', max_jerk=[10.0, 20.0, 30.0])
+    state = State(np.array([0.0, 1.0, 2.0]), np.array([1.0, -1.0, 0.0]),
+                  np.array([3.0, 0.0, -1.0]))
+    motion = plan_stop(cfg, state)
+    expected = scurve_brake(state.position, state.velocity, state.acceleration,
+                            cfg.max_acceleration, cfg.max_jerk)
+    assert motion.profile == 'stop' and motion.plan.duration == expected.duration
+    q, v, a = motion.plan.sample(np.array([0.0, motion.plan.duration]))
+    assert a[0] == pytest.approx(state.acceleration) and not np.any(np.abs(v[-1]) > 1e-12)
+    assert np.allclose(motion.end, q[-1])
+    assert limit_violation(motion.plan, np.full(3, 10.0), cfg.max_acceleration,
+                           cfg.max_jerk) is None
 
 
 def test_sample_grid():

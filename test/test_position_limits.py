@@ -1,5 +1,6 @@
 """traj_gen_ros.position_limits: exact position extrema of plans, refusals with names."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -7,6 +8,8 @@ import pytest
 from traj_gen_ros import min_time
 from traj_gen_ros.blends import brake
 from traj_gen_ros.joint_limits import merge_limits, UrdfLimits
+from traj_gen_ros.motion_planning import plan_request, plan_stop, State
+from traj_gen_ros.node_config import make_config
 from traj_gen_ros.paths import plan_path
 from traj_gen_ros.position_limits import check_plan, check_request, position_extrema
 from traj_gen_ros.request_parsing import GoalRequest, RequestError, ViaRequest
@@ -21,19 +24,21 @@ def limits(lower=-1.0, upper=1.0):
 
 def random_plans(count=150, seed=3):
     rng = np.random.default_rng(seed)
-    v_max, a_max = np.full(3, 2.0), np.full(3, 4.0)
+    v_max, a_max, j_max = np.full(3, 2.0), np.full(3, 4.0), np.full(3, 10.0)
     for _ in range(count):
-        profile = str(rng.choice(['cubic', 'quintic', 'lspb']))
+        profile = str(rng.choice(['cubic', 'quintic', 'lspb', 'scurve']))
         points = rng.normal(size=(int(rng.integers(2, 7)), 3))
         try:
             if rng.random() < 0.5:
                 durations = None if profile == 'lspb' else rng.uniform(0.3, 2.0, len(points) - 1)
                 yield plan_path(points, durations, profile, max_velocity=v_max,
-                                max_acceleration=a_max, blend_acceleration=a_max)
+                                max_acceleration=a_max, max_jerk=j_max,
+                                blend_acceleration=a_max)
             else:
                 yield min_time(points[0], points[1], v_max, a_max, profile,
-                               v0=rng.normal(size=3),
-                               a0=rng.normal(size=3) if profile == 'quintic' else 0.0)
+                               v0=rng.normal(size=3), max_jerk=j_max,
+                               a0=rng.normal(size=3) if profile in ('quintic', 'scurve')
+                               else 0.0)
         except ValueError:
             continue
 
@@ -69,6 +74,28 @@ def test_a_moving_start_that_must_brake_past_the_target_is_refused():
                                            r'parameter min_position; upper from parameter '
                                            r'max_position\)'):
         check_plan(limits(), plan, start)
+
+
+def test_scurve_plans_in_the_node_keep_the_position_limits():
+    config = dataclasses.replace(
+        make_config(NAMES, 100.0, 'scurve', 'heuristic', 2.0, 4.0, 0.0, 10.0),
+        limits=limits())
+    # From 0.6 rad at 1.5 rad/s, accelerating: braking within a_max and j_max passes 1 rad.
+    moving = State(np.array([0.6, 0.0, 0.0]), np.array([1.5, 0.0, 0.0]),
+                   np.array([2.0, 0.0, 0.0]))
+    with pytest.raises(RequestError, match="the plan would take joint 'shoulder' to 1\\."):
+        plan_request(config, moving, moving.position,
+                     GoalRequest(np.array([0]), np.array([0.8])))
+    with pytest.raises(RequestError, match="goal position 1.25 rad for joint 'wrist'"):
+        plan_request(config, moving, moving.position,
+                     GoalRequest(np.array([2]), np.array([1.25])))
+    slow = moving._replace(velocity=np.array([0.2, 0.0, 0.0]),
+                           acceleration=np.zeros(3))
+    motion = plan_request(config, slow, slow.position,
+                          GoalRequest(np.array([0]), np.array([0.8])))
+    assert motion.profile == 'scurve' and position_extrema(motion.plan)[1][0] <= 1.0
+    # ~/stop always runs, limits or not (it cannot be refused).
+    assert plan_stop(config, moving).plan.duration > 0
 
 
 def test_a_start_outside_the_range_may_come_back_but_not_go_further():

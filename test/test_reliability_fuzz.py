@@ -33,7 +33,7 @@ from reliability_cases import (
 )
 from sensor_msgs.msg import JointState
 from traj_gen_ros.motion_planning import held, plan_request, sample_motion
-from traj_gen_ros.node_config import make_config
+from traj_gen_ros.node_config import DEFAULT_MAX_JERK, make_config
 from traj_gen_ros.request_parsing import parse_goal, parse_via, RequestError
 from traj_gen_ros.schedule import Schedule
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
@@ -72,8 +72,11 @@ def check_plan(case, motion, state, hold, profile, a_limit, rate):
         assert np.allclose(ve[0], 0.0, atol=1e-6), 'not at rest at the end'
     assert np.all(np.abs(v) <= MAX_VELOCITY * (1 + 1e-6) + 1e-9), 'velocity limit'
     assert np.all(np.abs(a) <= a_limit * (1 + 1e-6) + 1e-9), 'acceleration limit'
+    if profile == 'scurve':  # from the state's acceleration, jerk within the default limit
+        assert np.allclose(a[0], state.acceleration, atol=1e-6), 'acceleration jumps'
+        assert np.all(plan.peak_jerk() <= DEFAULT_MAX_JERK * (1 + 1e-6)), 'jerk limit'
     moving = bool(np.any(state.velocity != 0.0) or
-                  (profile == 'quintic' and np.any(state.acceleration != 0.0)))
+                  (profile in ('quintic', 'scurve') and np.any(state.acceleration != 0.0)))
     low, high = envelope(times, state.position, moving, rows, row_times, profile, case.kind,
                          duration)
     slack = 1e-9 * (1 + np.abs(q))
@@ -182,7 +185,7 @@ def test_generated_requests_against_the_live_node(probe):
     hold = probe.wait_at_rest()
     for number in range(DDS_CASES):
         if number % 100 == 50:  # a parameter change mid-motion now and then
-            profile = PROFILES[(PROFILES.index(profile) + 1) % 3]
+            profile = PROFILES[(PROFILES.index(profile) + 1) % len(PROFILES)]
             probe.require_parameters(profile=profile)
         case = make_case(rng, probe.position(), dds=True)
         frame = f'fuzz-{SEED}-{number}'
@@ -254,7 +257,7 @@ def check_stream(probe, first, accepted, figures, sent):
         end = starts[index + 1] if index + 1 < len(accepted) else stamps[-1] + 1
         rows, row_times = full_rows(case, hold)
         moving = bool(np.any(velocities[0] != 0.0) or
-                      (profile == 'quintic' and np.any(accelerations[0] != 0.0)))
+                      (profile in ('quintic', 'scurve') and np.any(accelerations[0] != 0.0)))
         low, high = envelope(times, positions[0], moving, rows, row_times, profile, case.kind,
                              times[-1])
         assert np.all(positions >= low - 1e-9) and np.all(positions <= high + 1e-9), \

@@ -23,7 +23,8 @@ Interface (all names relative, so namespaces and remapping work):
   each accepted plan sampled every ``1/rate_hz`` s.
 * ``~/status`` (``diagnostic_msgs/DiagnosticStatus``): OK or ERROR with a reason, per request.
 * ``~/goal`` (``sensor_msgs/JointState``), ``~/via_points`` (``trajectory_msgs/JointTrajectory``).
-* ``~/stop`` (``std_srvs/Trigger``): brake within ``max_acceleration`` and hold.
+* ``~/stop`` (``std_srvs/Trigger``): brake within ``max_acceleration`` (and ``max_jerk``
+  with profile ``scurve``) and hold.
 * ``robot_description`` (``std_msgs/String``, transient local): the robot's URDF, in.
 * ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): the node's health, about 1 Hz.
 """
@@ -62,7 +63,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
 CONFIG_PARAMETERS = ('joints', 'rate_hz', 'profile', 'via_velocities', 'max_velocity',
-                     'max_acceleration', 'lspb_acceleration')
+                     'max_acceleration', 'lspb_acceleration', 'max_jerk')
 #: The executor thread gets the GIL back to the stream thread this often (s).
 SWITCH_INTERVAL = 0.0001
 #: The spin loop checks this often (s) whether SIGINT/SIGTERM asked it to end.

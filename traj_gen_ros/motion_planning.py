@@ -6,14 +6,17 @@ the new motion takes over) and ends at rest. The core's single entry points do t
 
 * a goal: :func:`traj_gen_ros.min_time` (synchronised, minimum time, from the state);
 * via points: :func:`traj_gen_ros.plan_path` (given times kept, or timed from the limits);
-* ``~/stop``: :func:`traj_gen_ros.brake`; at rest already: :func:`traj_gen_ros.hold`.
+* ``~/stop``: :func:`traj_gen_ros.brake` (profile ``scurve``: the jerk-limited
+  :func:`traj_gen_ros.scurve_brake`); at rest already: :func:`traj_gen_ros.hold`.
 
+Quintic and S-curve plans start from the state's acceleration too, so acceleration is
+continuous when a motion is replaced; the other profiles start from zero acceleration.
 Each plan is checked with the core's :func:`traj_gen_ros.limit_violation` (one tolerance,
-exact peaks) and bounded in duration and size. A refusal is a :class:`RequestError`
-whose message names joints by their ROS names (the core's :class:`JointError` knows them
-by index). No ROS here.
+exact peaks; jerk too for ``scurve``) and bounded in duration and size. A refusal is a
+:class:`RequestError` whose message names joints by their ROS names (the core's
+:class:`JointError` knows them by index). No ROS here.
 
-Units: rad, rad/s, rad/s², s; arrays are ``(samples, joints)``.
+Units: rad, rad/s, rad/s², rad/s³, s; arrays are ``(samples, joints)``.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from traj_gen_ros.node_config import Config
 from traj_gen_ros.paths import plan_path
 from traj_gen_ros.position_limits import check_plan, check_request
 from traj_gen_ros.request_parsing import GoalRequest, MAX_DURATION, RequestError, ViaRequest
+from traj_gen_ros.scurve_brake import scurve_brake
 from traj_gen_ros.timing import hold, min_time, shortest_duration
 from traj_gen_ros.trajectory import Trajectory
 
@@ -94,15 +98,15 @@ def plan_goal(config: Config, state: State, hold_at: np.ndarray,
     target = np.array(hold_at, dtype=float)
     target[request.joints] = request.positions
     check_reach(config, state.position, target[None, :])
-    quintic = config.profile == 'quintic'
+    keeps = config.keeps_acceleration
     velocity = state.velocity
-    acceleration = state.acceleration if quintic else np.zeros_like(velocity)
-    if _at_rest_at(state, target, quintic):
+    acceleration = state.acceleration if keeps else np.zeros_like(velocity)
+    if _at_rest_at(state, target, keeps):
         return held(target, config.profile, 'already there')
     try:
         plan = min_time(state.position, target, config.max_velocity,
                         config.profile_acceleration, config.profile, v0=velocity,
-                        a0=acceleration)
+                        a0=acceleration, max_jerk=config.max_jerk)
     except ValueError as error:  # JointError too: named by the joint's ROS name
         reason = error.named(config.joints) if isinstance(error, JointError) else str(error)
         moving = '' if not np.any(velocity) else (
@@ -112,11 +116,16 @@ def plan_goal(config: Config, state: State, hold_at: np.ndarray,
         raise RequestError(f'cannot plan the goal with profile {config.profile}{moving}: '
                            f'{reason}') from None
     # As in the core: a start already at (or, after limits were lowered, beyond) a limit
-    # may stay at that level while it slows down.
+    # may stay at that level while it slows down. With bounded jerk the velocity goes on
+    # by a0 |a0| / (2 max_jerk) while the acceleration returns to zero: unavoidable too.
     a_limit = config.profile_acceleration
+    v_limit = np.maximum(config.max_velocity, np.abs(velocity))
+    if config.jerk_limit is not None:
+        v_limit = np.maximum(v_limit, np.abs(
+            velocity + acceleration * np.abs(acceleration) / (2.0 * config.jerk_limit)))
     violation = limit_violation(
-        plan, np.maximum(config.max_velocity, np.abs(velocity)),
-        np.maximum(a_limit, np.abs(acceleration)) if quintic else a_limit)
+        plan, v_limit, np.maximum(a_limit, np.abs(acceleration)) if keeps else a_limit,
+        config.jerk_limit)
     if violation is not None:
         raise RequestError('the minimum-time plan breaks a limit: '
                            f'{violation.describe(config.joints)}')
@@ -140,9 +149,9 @@ def check_reach(config: Config, start: np.ndarray, points: np.ndarray) -> None:
                            f'plan would last above the limit of {MAX_DURATION:g} s')
 
 
-def _at_rest_at(state: State, target: np.ndarray, quintic: bool) -> bool:
+def _at_rest_at(state: State, target: np.ndarray, keeps_acceleration: bool) -> bool:
     still = not np.any(np.abs(state.velocity) > 1e-12)
-    if quintic:
+    if keeps_acceleration:
         still = still and not np.any(np.abs(state.acceleration) > 1e-12)
     return still and not np.any(np.abs(state.position - target) > 1e-12)
 
@@ -164,15 +173,15 @@ def plan_via(config: Config, state: State, hold_at: np.ndarray,
         target = np.array(hold_at, dtype=float)  # the others keep the target they had
         target[request.joints] = request.positions[-1]
         return plan_goal(config, state, target, GoalRequest(np.zeros(0, int), np.zeros(0)))
-    quintic = config.profile == 'quintic'
 
     def build(durations: np.ndarray | None) -> Trajectory:
         return plan_path(
             points, durations, config.profile,
             velocities=config.via_velocities if velocities is None else velocities,
             accelerations=accelerations, v0=state.velocity,
-            a0=state.acceleration if quintic else 0.0, max_velocity=config.max_velocity,
-            max_acceleration=config.max_acceleration,
+            a0=state.acceleration if config.keeps_acceleration else 0.0,
+            max_velocity=config.max_velocity, max_acceleration=config.max_acceleration,
+            max_jerk=config.max_jerk if config.profile == 'scurve' else None,
             blend_acceleration=config.lspb_acceleration)
 
     a_limit = config.profile_acceleration
@@ -192,12 +201,12 @@ def plan_via(config: Config, state: State, hold_at: np.ndarray,
                                           config)) from None
         except ValueError as error:
             raise RequestError(_too_short(str(error), durations, build, config)) from None
-        violation = limit_violation(plan, config.max_velocity, a_limit)
+        violation = limit_violation(plan, config.max_velocity, a_limit, config.jerk_limit)
         if violation is not None:
             raise RequestError(_too_short(violation.describe(config.joints), durations,
                                           build, config))
         return PlannedMotion(plan, config.profile, points[-1])
-    violation = limit_violation(plan, config.max_velocity, a_limit)
+    violation = limit_violation(plan, config.max_velocity, a_limit, config.jerk_limit)
     if violation is not None:
         raise RequestError(f'the plan breaks a limit: {violation.describe(config.joints)}')
     return PlannedMotion(plan, config.profile, points[-1], note)
@@ -209,9 +218,9 @@ def _check_boundary_conditions(profile: str, request: ViaRequest) -> None:
         raise RequestError('profile lspb takes the velocities at via points from the segment '
                            'slopes (Craig 7.3) and cannot honour given velocities/'
                            'accelerations: leave them empty or use profile cubic or quintic')
-    if profile == 'cubic' and request.accelerations is not None:
-        raise RequestError('profile cubic cannot honour accelerations at via points: leave '
-                           'them empty or use profile quintic')
+    if profile in ('cubic', 'scurve') and request.accelerations is not None:
+        raise RequestError(f'profile {profile} cannot honour accelerations at via points: '
+                           'leave them empty or use profile quintic')
     if request.velocities is not None and np.any(np.abs(request.velocities[-1]) > 1e-12):
         raise RequestError('the last point must have zero velocity: the generator holds '
                            'still at the end of every plan')
@@ -288,8 +297,18 @@ def via_points(joints: Sequence[str], state: State, hold_at: np.ndarray, request
 
 
 def plan_stop(config: Config, state: State) -> PlannedMotion:
-    """Brake from ``state`` to rest within ``max_acceleration`` (rad/s²), then hold."""
-    plan = brake(state.position, state.velocity, config.max_acceleration)
+    """
+    Brake from ``state`` to rest within ``max_acceleration`` (rad/s²), then hold.
+
+    With profile ``scurve`` the jerk stays within ``max_jerk`` (rad/s³) and the
+    acceleration is continuous from the state's (:func:`traj_gen_ros.scurve_brake`);
+    the other profiles brake at ``max_acceleration`` at once (:func:`traj_gen_ros.brake`).
+    """
+    if config.profile == 'scurve':
+        plan = scurve_brake(state.position, state.velocity, state.acceleration,
+                            config.max_acceleration, config.max_jerk)
+    else:
+        plan = brake(state.position, state.velocity, config.max_acceleration)
     return PlannedMotion(plan, 'stop', plan.sample(plan.duration)[0][0])
 
 

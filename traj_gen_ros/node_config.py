@@ -6,7 +6,7 @@ The node's parameters, checked together into one :class:`Config` (no ROS here).
 the parameter and saying what is valid. The node calls it at start-up (a bad value ends
 the node with exit status 1) and before every parameter change (a bad value is refused).
 
-Units: rad/s, rad/s², Hz.
+Units: rad/s, rad/s², rad/s³, Hz.
 """
 
 from __future__ import annotations
@@ -17,11 +17,13 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
+from traj_gen_ros.timing import PROFILES  # the core's: the node offers every profile
 
 if TYPE_CHECKING:
     from traj_gen_ros.joint_limits import JointLimits
 
-PROFILES = ('cubic', 'quintic', 'lspb')
+#: Jerk limit (rad/s³) when ``max_jerk`` is not given: the S-curve's.
+DEFAULT_MAX_JERK = 20.0
 VIA_VELOCITIES = ('heuristic', 'continuous')
 MIN_RATE_HZ = 1.0
 MAX_RATE_HZ = 1000.0
@@ -43,6 +45,8 @@ class Config:
     max_velocity: np.ndarray
     max_acceleration: np.ndarray
     lspb_acceleration: np.ndarray
+    #: Jerk limit (rad/s³) of the ``scurve`` profile and of its ``~/stop``.
+    max_jerk: np.ndarray
     #: Position (and velocity) limits in force, with their sources; None: no position limits.
     limits: JointLimits | None = None
 
@@ -50,6 +54,16 @@ class Config:
     def profile_acceleration(self) -> np.ndarray:
         """Acceleration limit used for timing (rad/s²): the LSPB blend one for ``lspb``."""
         return self.lspb_acceleration if self.profile == 'lspb' else self.max_acceleration
+
+    @property
+    def jerk_limit(self) -> np.ndarray | None:
+        """Jerk limit (rad/s³) the plans are checked against: ``max_jerk`` for ``scurve``."""
+        return self.max_jerk if self.profile == 'scurve' else None
+
+    @property
+    def keeps_acceleration(self) -> bool:
+        """Whether plans start from the current acceleration (quintic, scurve) or from 0."""
+        return self.profile in ('quintic', 'scurve')
 
     @property
     def period_ns(self) -> int:
@@ -116,8 +130,13 @@ def initial_state(joints: Sequence[str], initial_positions: Sequence[float]) -> 
 
 def make_config(joints: Sequence[str], rate_hz: float, profile: str, via_velocities: str,
                 max_velocity: object, max_acceleration: object,
-                lspb_acceleration: object) -> Config:
-    """Validate the node parameters together; raise ``ValueError`` with the reason."""
+                lspb_acceleration: object, max_jerk: object = DEFAULT_MAX_JERK) -> Config:
+    """
+    Validate the node parameters together; raise ``ValueError`` with the reason.
+
+    Limits in rad/s (``max_velocity``), rad/s² (``max_acceleration``,
+    ``lspb_acceleration``) and rad/s³ (``max_jerk``), one value or one per joint.
+    """
     names = check_joint_names(joints)
     if isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float)) \
             or not MIN_RATE_HZ <= rate_hz <= MAX_RATE_HZ:
@@ -132,6 +151,7 @@ def make_config(joints: Sequence[str], rate_hz: float, profile: str, via_velocit
     v_max = per_joint('max_velocity', max_velocity, count)
     a_max = per_joint('max_acceleration', max_acceleration, count)
     a_lspb = per_joint('lspb_acceleration', lspb_acceleration, count, allow_zero=True)
+    j_max = per_joint('max_jerk', max_jerk, count)
     too_high = np.flatnonzero(a_lspb > a_max)
     if too_high.size:
         index = too_high[0]
@@ -139,4 +159,4 @@ def make_config(joints: Sequence[str], rate_hz: float, profile: str, via_velocit
                          f'above max_acceleration {a_max[index]:g}: use a value <= '
                          f'max_acceleration, or 0 to use max_acceleration')
     a_lspb = np.where(a_lspb == 0.0, a_max, a_lspb)
-    return Config(names, float(rate_hz), profile, via_velocities, v_max, a_max, a_lspb)
+    return Config(names, float(rate_hz), profile, via_velocities, v_max, a_max, a_lspb, j_max)

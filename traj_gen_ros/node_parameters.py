@@ -8,8 +8,9 @@ Every parameter is declared *statically typed*: its type never changes, so
   /trajectory_generator rate_hz 50`` (an integer on the command line) sets ``rate_hz`` to
   ``50.0``, and an integer in a parameters file is read the same way;
 * a per-joint parameter (``max_velocity``, ``max_acceleration``, ``lspb_acceleration``,
-  ``min_position``, ``max_position``) is a double array: one value for all joints or one
-  per joint. A single number (integer or double) is stored as a one-element array;
+  ``max_jerk``, ``min_position``, ``max_position``) is a double array: one value for all
+  joints or one per joint. A single number (integer or double) is stored as a one-element
+  array;
 * any other type (a string, a bool, …) is refused by rclpy with
   ``Wrong parameter type, expected 'Type.DOUBLE' got 'Type.STRING'``, and the parameter
   keeps its value.
@@ -21,7 +22,7 @@ per-joint arrays state their rule in ``description`` and ``additional_constraint
 (rclpy checks no range on arrays; :mod:`traj_gen_ros.node_config` and
 :mod:`traj_gen_ros.node_limits` do).
 
-Units: rad (or m), rad/s, rad/s², Hz.
+Units: rad (or m), rad/s, rad/s², rad/s³, Hz.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ import math
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from traj_gen_ros.node_config import MAX_RATE_HZ, MIN_RATE_HZ
+from traj_gen_ros.node_config import DEFAULT_MAX_JERK, MAX_RATE_HZ, MIN_RATE_HZ, PROFILES
 
 DEFAULT_JOINTS = [f'joint_{index}' for index in range(1, 7)]
 PER_JOINT = 'one value for all joints or one per joint'
@@ -39,7 +40,7 @@ PER_JOINT = 'one value for all joints or one per joint'
 DOUBLES = ('rate_hz',)
 #: Per-joint parameters, declared as double arrays: one number is stored as ``[number]``.
 DOUBLE_ARRAYS = ('initial_positions', 'max_velocity', 'max_acceleration', 'lspb_acceleration',
-                 'min_position', 'max_position')
+                 'max_jerk', 'min_position', 'max_position')
 
 _DOUBLE = Parameter.Type.DOUBLE
 _DOUBLE_ARRAY = Parameter.Type.DOUBLE_ARRAY
@@ -78,7 +79,7 @@ def descriptors(joint_count: int) -> dict[str, tuple[object, ParameterDescriptor
                                                      to_value=MAX_RATE_HZ)])),
         'profile': ('quintic', ParameterDescriptor(
             description='Profile of the next plans.', type=ParameterType.PARAMETER_STRING,
-            additional_constraints='cubic | quintic | lspb')),
+            additional_constraints=' | '.join(PROFILES))),
         'via_velocities': ('heuristic', ParameterDescriptor(
             description='Velocities at via points for cubic/quintic when none are given.',
             type=ParameterType.PARAMETER_STRING,
@@ -89,6 +90,9 @@ def descriptors(joint_count: int) -> dict[str, tuple[object, ParameterDescriptor
         'max_acceleration': ([2.0], _per_joint(
             'Acceleration limit, used for timing, checked on every plan, and the braking '
             'rate of ~/stop', 'each finite and > 0', 'rad/s^2 or m/s^2')),
+        'max_jerk': ([DEFAULT_MAX_JERK], _per_joint(
+            'Jerk limit of profile scurve: used for timing, checked on every scurve plan, and '
+            'the jerk bound of ~/stop with scurve', 'each finite and > 0', 'rad/s^3 or m/s^3')),
         'lspb_acceleration': ([0.0], _per_joint(
             'LSPB blend acceleration; 0 means max_acceleration',
             'each 0 <= value <= max_acceleration', 'rad/s^2 or m/s^2')),
