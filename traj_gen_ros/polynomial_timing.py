@@ -26,6 +26,7 @@ Units: rad, rad/s, rad/s², s.
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 from traj_gen_ros import second_order
@@ -130,6 +131,21 @@ def _deflated(polynomials: np.ndarray) -> np.ndarray:
     return polynomials
 
 
+@functools.cache
+def _bernstein_matrix(size: int) -> np.ndarray:
+    """
+    Map ascending coefficients (degree ``size - 1``) to Bernstein ones on ``[0, 1]``.
+
+    ``b_i = Σ_{k ≤ i} C(i, k) / C(n, k) c_k``.
+    """
+    degree = size - 1
+    matrix = np.zeros((size, size))
+    for power in range(size):
+        for index in range(power, size):
+            matrix[power, index] = math.comb(index, power) / math.comb(degree, power)
+    return matrix
+
+
 def _roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     Real roots in ``[0, 1]`` of ascending polynomials ``(count, n)`` and whose each is.
@@ -140,6 +156,12 @@ def _roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarray, np.nda
     roots split by rounding): an extra candidate costs a check, a missing one a window.
     """
     polynomials = _deflated(polynomials)
+    # Convex hull of the Bernstein coefficients on [0, 1]: all of one sign, no root there.
+    # The margin (1e-12 of the largest) keeps rounding from hiding a touching root.
+    bernstein = polynomials @ _bernstein_matrix(polynomials.shape[1])
+    margin = 1e-12 * np.max(np.abs(bernstein), axis=1, keepdims=True)
+    rootless = (bernstein > margin).all(axis=1) | (bernstein < -margin).all(axis=1)
+    polynomials = np.where(rootless[:, None], 0.0, polynomials)
     scale = np.max(np.abs(polynomials), axis=1)
     significant = np.abs(polynomials) > 1e-13 * scale[:, None]
     degrees = np.where(significant.any(axis=1),
