@@ -188,13 +188,28 @@ class Probe(Node):
         return np.array(self.latest().position)
 
     def wait_at_rest(self, timeout: float = 10.0) -> np.ndarray:
-        """Wait until the stream holds still (ten zero-velocity samples); return position."""
+        """
+        Wait until the stream holds still (ten zero-velocity samples); return position.
+
+        The samples must be stamped after the end of the last ``~/trajectory`` received: a
+        motion's status and first setpoints travel on different topics, so the stream's
+        tail may still be the rest before a motion that has just been accepted.
+        """
         def resting():
             tail = self.states[-10:]
             return len(tail) == 10 and all(not any(s.velocity) for s in tail) and \
-                len({tuple(s.position) for s in tail}) == 1
+                len({tuple(s.position) for s in tail}) == 1 and \
+                stamp_ns(tail[0].header.stamp) >= self._motion_end_ns()
         self.spin_until(resting, timeout, 'the stream to hold still')
         return self.position()
+
+    def _motion_end_ns(self) -> int:
+        """End of the last ``~/trajectory`` received, on the node's clock (ns); 0 if none."""
+        if not self.trajectories or not self.trajectories[-1].points:
+            return 0
+        last = self.trajectories[-1]
+        span = last.points[-1].time_from_start
+        return stamp_ns(last.header.stamp) + span.sec * 1_000_000_000 + span.nanosec
 
     def states_between(self, start_ns: int, end_ns: int | None = None):
         """Stamps (s, relative to ``start_ns``), positions and velocities in a window."""
