@@ -1,0 +1,140 @@
+"""
+Candidate durations and exact peaks of cubic/quintic moves to rest from a moving state.
+
+The resultant tables of ``polynomial_candidates`` are rebuilt here from their definition
+(Sylvester resultant of ``P`` and ``∂P/∂τ`` in ``T``, from Craig's closed-form moves);
+``move_peaks`` is compared with peaks from ``numpy.polynomial`` roots; and on a fine grid
+of durations, feasibility only changes where a candidate lies.
+"""
+
+import core_helpers as helpers
+import numpy as np
+import numpy.polynomial.polynomial as poly
+import pytest
+from traj_gen_ros import cubic, quintic
+from traj_gen_ros.move_peaks import peaks
+from traj_gen_ros.polynomial_candidates import _interior_polynomials, candidates
+
+# Position in normalised time τ, per term (ascending in τ): Craig's quintic (eq. 7.3-7.5)
+# and cubic (eq. 7.9) to rest, as D·m_D + v0 T·m_v + a0 T²·m_a.
+SHAPES = {
+    'quintic': {'D': [0, 0, 0, 10, -15, 6], 'v': [0, 1, 0, -6, 8, -3],
+                'a': [0, 0, 0.5, -1.5, 1.5, -0.5]},
+    'cubic': {'D': [0, 0, 3, -2], 'v': [0, 1, -2, 1], 'a': [0]},
+}
+# The known factor divided out of each resultant (see polynomial_candidates).
+FACTORS = {
+    ('quintic', 0, 'general'): lambda d, v, a: 60 * d * a * poly.polymul([0, 1], [1, -2, 1]),
+    ('quintic', 0, 'no_a0'): lambda d, v, a: 60 * d * np.array([0, -1, 1]),
+    ('quintic', 0, 'no_d'): lambda d, v, a: -a * np.array([-1, 1]),
+    ('quintic', 1, 'general'): lambda d, v, a: np.array([720 * d]),
+    ('quintic', 1, 'no_d'): lambda d, v, a: np.array([-12 * v]),
+    ('cubic', 0, 'general'): lambda d, v, a: np.array([6 * d]),
+}
+
+
+def quadratic_in_t(profile, order, sign, d, v, a, limit):
+    """Coefficients ``(p2, p1, p0)`` of ``P(τ, T)``, each ascending in τ."""
+    shapes = SHAPES[profile]
+    terms = [poly.polyder(shapes[key], order) * scale
+             for key, scale in (('a', a), ('v', v), ('D', d))]
+    limit_power = 1 if order == 1 else 0
+    terms[limit_power] = poly.polysub(terms[limit_power], [sign * limit])
+    return terms
+
+
+def resultant(p, q):
+    """Resultant in T of two quadratics (or lower) given as (p2, p1, p0) in τ."""
+    m = poly.polymul
+    p2, p1, p0 = p
+    q2, q1, q0 = q
+    if not np.any(p2) and not np.any(q2):
+        return poly.polysub(m(p1, q0), m(q1, p0))
+    first = poly.polysub(m(p2, q0), m(q2, p0))
+    second = poly.polysub(m(p2, q1), m(q2, p1))
+    third = poly.polysub(m(p1, q0), m(q1, p0))
+    return poly.polysub(m(first, first), m(second, third))
+
+
+def divided_out_of_t(p, constant):
+    """``P / T`` when P has no constant term (D = 0): the powers shift down."""
+    return [np.zeros(1), p[0], p[1]] if constant else p
+
+
+@pytest.mark.parametrize('profile, order, kind', list(FACTORS))
+def test_resultant_tables_equal_the_sylvester_resultant(profile, order, kind):
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        d, v, a, limit = rng.uniform(0.3, 2.0, 4) * rng.choice([-1, 1], 4)
+        limit = abs(limit)
+        if kind == 'no_a0':
+            a = 0.0
+        if kind == 'no_d':
+            d = 0.0
+        if profile == 'cubic':
+            a = 0.0
+        moves = [np.array([x]) for x in (d, v, a, limit, limit)]
+        table = _interior_polynomials(profile, *moves)[order, :, 0]
+        for sign_index, sign in enumerate((1.0, -1.0)):
+            p = quadratic_in_t(profile, order + 1, sign, d, v, a, limit)
+            if kind == 'no_d':  # P has no constant term: divide by T
+                p = [np.zeros(1), p[0], p[1]]
+            q = [poly.polyder(term) if len(term) > 1 else np.zeros(1) for term in p]
+            full = resultant(p, q)
+            quotient, remainder = poly.polydiv(full, FACTORS[(profile, order, kind)](d, v, a))
+            assert np.max(np.abs(remainder)) <= 1e-9 * np.max(np.abs(full))
+            assert np.all(np.abs(quotient[10:]) <= 1e-9 * np.max(np.abs(quotient)))
+            expected = np.zeros(10)
+            expected[:min(quotient.size, 10)] = quotient[:10]
+            np.testing.assert_allclose(table[sign_index], expected,
+                                       atol=1e-9 * np.max(np.abs(expected)))
+
+
+def plan(profile, d, v, a, duration):
+    """Plan the move itself with the core's cubic/quintic."""
+    if profile == 'cubic':
+        return cubic([0.0], [d], duration, v0=[v])
+    return quintic([0.0], [d], duration, v0=[v], a0=[a])
+
+
+@pytest.mark.parametrize('profile', ['cubic', 'quintic'])
+def test_peaks_equal_peaks_from_numpy_roots(profile):
+    rng = np.random.default_rng(11)
+    count = 300
+    d = rng.normal(size=count) * 10.0 ** rng.uniform(-3, 2, count)
+    v, a = rng.normal(size=count), rng.normal(size=count) * 3.0
+    duration = 10.0 ** rng.uniform(-2, 2, count)
+    d[::7], v[::5], a[::3] = 0.0, 0.0, 0.0
+    if profile == 'cubic':
+        a[:] = 0.0
+    velocity, acceleration = peaks(profile, d, v, a, duration)
+    for k in range(count):
+        expected = helpers.reference_peaks(plan(profile, d[k], v[k], a[k], duration[k]))
+        np.testing.assert_allclose([velocity[k], acceleration[k]],
+                                   [expected[0][0], expected[1][0]], rtol=1e-9, atol=1e-300)
+
+
+@pytest.mark.parametrize('profile', ['cubic', 'quintic'])
+def test_feasibility_changes_only_at_candidates(profile):
+    rng = np.random.default_rng(5)
+    flips = 0
+    for _ in range(40):
+        d = rng.normal()
+        v, a = rng.normal() * 0.6, (rng.normal() if profile == 'quintic' else 0.0)
+        max_velocity, max_acceleration = rng.uniform(0.5, 2.0), rng.uniform(1.0, 4.0)
+        v = np.clip(v, -max_velocity, max_velocity)
+        a = np.clip(a, -max_acceleration, max_acceleration)
+        moves = [np.array([x]) for x in (d, v, a, max_velocity, max_acceleration)]
+        found, _ = candidates(profile, *moves)
+        grid = np.geomspace(1e-2, 1e2, 4000)
+        velocity, acceleration = peaks(profile, np.full(grid.size, d), np.full(grid.size, v),
+                                       np.full(grid.size, a), grid)
+        # The planner's tolerance: a start at a limit stays there to rounding.
+        feasible = (velocity <= max_velocity * (1 + 1e-9)) & \
+            (acceleration <= max_acceleration * (1 + 1e-9))
+        for change in np.flatnonzero(feasible[1:] != feasible[:-1]):
+            flips += 1
+            low, high = grid[change], grid[change + 1]
+            assert np.any((found >= low * (1 - 1e-9)) & (found <= high * (1 + 1e-9))), \
+                (d, v, a, max_velocity, max_acceleration, low, high, found)
+    assert flips > 20  # the check did meet windows and boundaries

@@ -1,0 +1,207 @@
+"""
+Every duration at which a cubic or quintic move to rest can start or stop meeting a limit.
+
+A cubic (Craig eq. (7.9), from ``v0``) or quintic (eqs. (7.3)-(7.5), from ``v0``, ``a0``)
+moving ``D`` in ``T`` has, in normalised time ``τ = t/T``, velocity and acceleration with
+
+``T v - σVT = a0 m_a'(τ) T² + (v0 m_v'(τ) - σV) T + D m_D'(τ)`` and
+``T² a - σAT² = (a0 m_a''(τ) - σA) T² + v0 m_v''(τ) T + D m_D''(τ)``, ``σ = ±1``,
+
+where ``m_v``, ``m_a``, ``m_D`` are the columns of the profile's boundary-condition
+matrix: quadratics ``P(τ, T)`` in ``T``. The peak ``|v|`` (or ``|a|``) equals its limit
+at a duration ``T`` either at an end (``P(0, T) = 0`` or ``P(1, T) = 0``), or where an
+extremum enters at an end (``∂P/∂τ = 0`` there), or at an interior extremum:
+``P = ∂P/∂τ = 0`` together, whose resultant in ``T`` (the Sylvester determinant) is a
+polynomial in ``τ``. Those resultants, divided by their known factors, are linear in a
+few products of the inputs; the tables below hold their ascending coefficients in ``τ``
+(derived symbolically; ``test/test_polynomial_candidates.py`` rebuilds them from the
+definition). Their roots in ``[0, 1]`` (:mod:`traj_gen_ros.unit_roots`) give ``τ``, and
+``P(τ, T) = 0`` gives the durations. Units: rad, rad/s, rad/s², s.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from traj_gen_ros.polynomial import CUBIC_MATRIX, QUINTIC_MATRIX
+from traj_gen_ros.unit_roots import quadratic_roots_in_unit_interval, roots_in_unit_interval
+
+
+def _padded(*rows: list[float]) -> np.ndarray:
+    """Rows of ascending coefficients padded to degree 9."""
+    table = np.zeros((len(rows), 10))
+    for index, row in enumerate(rows):
+        table[index, :len(row)] = row
+    return table
+
+
+#: Quintic velocity, resultant / (60 D a0 τ (τ - 1)²); rows: v0², σ V v0, a0 D, V².
+QUINTIC_VELOCITY = _padded([1, -10, 44, -100, 110, -16, -100, 116, -55, 10],
+                           [-2, 20, -70, 120, -110, 52, -10],
+                           [0, 0, 0, 15, -90, 225, -300, 225, -90, 15],
+                           [1, -10, 26, -20])
+#: a0 = 0: resultant of the linear P / (60 D τ (τ - 1)); rows: v0, σ V.
+QUINTIC_VELOCITY_NO_A0 = _padded([-1, 2, 0, -2, 1], [1, -2])
+#: D = 0: resultant of P/T / (a0 (1 - τ)); rows: v0, σ V.
+QUINTIC_VELOCITY_NO_D = _padded([-1, 8, -28, 46, -35, 10], [1, -8, 10])
+#: Quintic acceleration, resultant / (720 D); rows: v0² a0, σ A v0², a0² D, σ A a0 D, A² D.
+QUINTIC_ACCELERATION = _padded([0, 0, 36, -264, 816, -1344, 1236, -600, 120],
+                               [0, 0, -36, 264, -600, 552, -180],
+                               [5, -60, 330, -1060, 2145, -2760, 2180, -960, 180],
+                               [-10, 120, -570, 1420, -1920, 1320, -360],
+                               [5, -60, 240, -360, 180])
+#: D = 0: resultant of P/T / (-12 v0); rows: a0, σ A.
+QUINTIC_ACCELERATION_NO_D = _padded([3, -16, 33, -30, 10], [-3, 16, -15])
+#: Cubic velocity, resultant of the linear P / (6 D); rows: v0, σ V. (Its acceleration
+#: is linear in τ: no interior extremum.)
+CUBIC_VELOCITY = _padded([1, -2, 1], [-1, 2])
+
+
+def _shape_derivatives(matrix: np.ndarray, columns: tuple[int | None, ...]) -> np.ndarray:
+    """``(2 orders, 3 shapes a/v/D, 6)``: ascending m', m'' of the shapes (zero if None)."""
+    shapes = np.zeros((3, 6))
+    for row, column in zip((1, 0, 2), columns, strict=True):
+        if column is not None:
+            shapes[row, :matrix.shape[0]] = matrix[:, column]
+    first = np.zeros_like(shapes)
+    first[:, :-1] = shapes[:, 1:] * np.arange(1, 6)
+    second = np.zeros_like(shapes)
+    second[:, :-1] = first[:, 1:] * np.arange(1, 6)
+    return np.stack([first, second])
+
+
+# Shapes in the order (a0 T² term, v0 T term, D term), matching P's powers T², T, 1.
+_SHAPES = {
+    'cubic': _shape_derivatives(CUBIC_MATRIX, (1, None, 2)),
+    'quintic': _shape_derivatives(QUINTIC_MATRIX, (1, 2, 3)),
+}
+
+
+def _ends(shapes: np.ndarray) -> np.ndarray:
+    """``(2 orders, 4 conditions, 3 shapes)``: P at τ = 0, 1 and ∂P/∂τ at τ = 0, 1."""
+    slopes = np.zeros_like(shapes)
+    slopes[..., :-1] = shapes[..., 1:] * np.arange(1, 6)
+    return np.stack([shapes[..., 0], shapes.sum(axis=-1), slopes[..., 0],
+                     slopes.sum(axis=-1)], axis=1)
+
+
+_ENDS = {profile: _ends(shapes) for profile, shapes in _SHAPES.items()}
+_SIGNS = np.array([1.0, -1.0])  # σ
+
+
+def _positive_roots(p2: np.ndarray, p1: np.ndarray, p0: np.ndarray) -> np.ndarray:
+    """
+    Positive real roots of ``p2 T² + p1 T + p0`` (flat), ``(2, count)``; others not > 0.
+
+    Stable pair: ``q = -(p1 + sgn(p1) √Δ)/2``, ``T = q/p2`` and ``p0/q`` (``p2 = 0``: the
+    linear root ``-p0/p1`` is the second). A negative ``Δ`` within rounding counts as a
+    double root; complex pairs, divisions by zero and NaN give no positive root.
+    """
+    square = p1 * p1
+    product = 4.0 * p2 * p0
+    discriminant = square - product
+    half = -0.5 * (p1 + np.copysign(np.sqrt(np.maximum(discriminant, 0.0)), p1))
+    roots = np.empty((2, p1.size))
+    # Divisions by 0 give inf or NaN, which the caller drops (no positive finite root).
+    with np.errstate(divide='ignore', invalid='ignore'):
+        np.divide(half, p2, out=roots[0])
+        np.divide(p0, half, out=roots[1])
+    roots[:, discriminant < -1e-12 * (square + np.abs(product))] = np.nan
+    return roots
+
+
+def _block_table(blocks: list[tuple[int, np.ndarray, list[int]]], rows: int) -> np.ndarray:
+    """
+    ``(rows, 2 orders · 2 signs · 10)``: one product of monomials gives every resultant.
+
+    Each block ``(order, table, odd)`` places ``table`` (monomial rows) into both sign
+    columns of its order, with the rows listed in ``odd`` (odd powers of ``σ``) negated
+    for ``σ = -1``. Blocks take consecutive monomial rows.
+    """
+    big = np.zeros((rows, 2, 2, 10))
+    row = 0
+    for order, table, odd in blocks:
+        signs = np.ones((table.shape[0], 1))
+        signs[odd] = -1.0
+        big[row:row + table.shape[0], order, 0] = table
+        big[row:row + table.shape[0], order, 1] = table * signs
+        row += table.shape[0]
+    return big.reshape(rows, -1)
+
+
+# Monomial columns: see _monomials.
+_TABLES = {
+    'cubic': _block_table([(0, CUBIC_VELOCITY, [1])], 2),
+    'quintic': _block_table([(0, QUINTIC_VELOCITY, [1]), (0, QUINTIC_VELOCITY_NO_A0, [1]),
+                             (0, QUINTIC_VELOCITY_NO_D, [1]), (1, QUINTIC_ACCELERATION, [1, 3]),
+                             (1, QUINTIC_ACCELERATION_NO_D, [1])], 15),
+}
+
+
+def _monomials(profile: str, displacement: np.ndarray, velocity: np.ndarray,
+               acceleration: np.ndarray, max_velocity: np.ndarray,
+               max_acceleration: np.ndarray) -> np.ndarray:
+    """
+    ``(joints, rows)``: the products the resultants are linear in (with ``σ = +1``).
+
+    Degenerate inputs take their own resultant (a0 = 0 or D = 0: ``P`` loses a power of
+    ``T``); where none is defined the peak does not depend on ``T`` and the row is zero.
+    """
+    has_d, has_a0 = displacement != 0.0, acceleration != 0.0
+    if profile == 'cubic':
+        return np.stack([velocity, max_velocity], axis=1) * has_d[:, None]
+    v0_squared = velocity * velocity
+    general = has_d & has_a0
+    no_a0 = has_d & ~has_a0
+    no_d = ~has_d & has_a0
+    no_d_acceleration = ~has_d & (velocity != 0.0)
+    a_d = acceleration * displacement
+    return np.stack([
+        v0_squared * general, max_velocity * velocity * general, a_d * general,
+        max_velocity * max_velocity * general,
+        velocity * no_a0, max_velocity * no_a0, velocity * no_d, max_velocity * no_d,
+        v0_squared * acceleration * has_d, max_acceleration * v0_squared * has_d,
+        a_d * acceleration,
+        max_acceleration * a_d, max_acceleration * max_acceleration * displacement,
+        acceleration * no_d_acceleration, max_acceleration * no_d_acceleration], axis=1)
+
+
+def _interior_polynomials(profile: str, *moves: np.ndarray) -> np.ndarray:
+    """Resultant polynomials in τ, ``(2 orders, 2 signs, joints, 10)``."""
+    products = _monomials(profile, *moves) @ _TABLES[profile]
+    return products.reshape(-1, 2, 2, 10).transpose(1, 2, 0, 3)
+
+
+def candidates(profile: str, displacement: np.ndarray, velocity: np.ndarray,
+               acceleration: np.ndarray, max_velocity: np.ndarray,
+               max_acceleration: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every duration at which a joint's peak can equal its limit, and that joint's index."""
+    joints = displacement.size
+    scales = np.stack([acceleration, velocity, displacement])  # P's T², T, 1 terms
+    limits = np.stack([max_velocity, max_acceleration])
+    limit_power = np.array([1, 0])  # the limit term multiplies T (velocity), T² (acc.)
+    # Ends: (2 signs, 2 orders, 4 conditions, 3 powers, joints); the limit enters P
+    # (conditions 0 and 1), not ∂P/∂τ.
+    ends = np.repeat((_ENDS[profile][..., None] * scales)[None], 2, axis=0)
+    for order in range(2):
+        ends[:, order, :2, limit_power[order]] -= _SIGNS[:, None, None] * limits[order]
+    end_durations = _positive_roots(ends[..., 0, :].reshape(-1), ends[..., 1, :].reshape(-1),
+                                    ends[..., 2, :].reshape(-1)).reshape(-1)
+    end_owners = np.tile(np.arange(joints), end_durations.size // joints)
+    # Interior extrema: roots in τ of the resultants, then P(τ, T) = 0 for T.
+    polynomials = _interior_polynomials(profile, displacement, velocity, acceleration,
+                                        max_velocity, max_acceleration)
+    if profile == 'cubic':  # quadratics in τ (velocity only): closed form
+        taus, rows = quadratic_roots_in_unit_interval(polynomials[0].reshape(-1, 10))
+    else:
+        taus, rows = roots_in_unit_interval(polynomials.reshape(-1, 10))
+    order, sign, joint = np.unravel_index(rows, (2, 2, joints))
+    powers = taus[:, None] ** np.arange(6)
+    # Shape values at τ: (roots, 3 powers of T)
+    values = np.einsum('rk,rsk->rs', powers, _SHAPES[profile][order]) * scales[:, joint].T
+    values[np.arange(taus.size), limit_power[order]] -= \
+        np.where(sign == 0, 1.0, -1.0) * limits[order, joint]
+    interior = _positive_roots(values[:, 0], values[:, 1], values[:, 2]).reshape(-1)
+    durations = np.concatenate([end_durations, interior])
+    owners = np.concatenate([end_owners, np.tile(joint, 2)])
+    keep = np.isfinite(durations) & (durations > 0.0)
+    return durations[keep], owners[keep]
