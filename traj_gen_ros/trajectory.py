@@ -14,9 +14,8 @@ from functools import cached_property
 import math
 
 import numpy as np
+from traj_gen_ros.polynomial_peaks import unit_peaks
 
-_PEAK_SEED_SAMPLES = 17  # samples per segment that seed the Newton search for extrema
-_PEAK_NEWTON_STEPS = 8
 # Samples per piece above which each piece is evaluated as one matrix product.
 _SAMPLES_PER_PIECE_FOR_MATMUL = 16
 _SAMPLES_PER_PRODUCT = 4096  # keeps each product's operands in cache
@@ -96,13 +95,14 @@ class Trajectory:
         """
         Find the largest ``|velocity|`` and ``|acceleration|`` per joint, ``(joints,)`` each.
 
-        Each piece is searched from a few seed samples, refined by Newton steps on the next
-        derivative, so the values are exact extrema to rounding, not sampled estimates.
+        Extrema from the closed-form roots of the next derivative (:func:`peak_abs`): exact
+        to rounding, not sampled estimates.
         """
         velocity = _derivative(self.coefficients)
         acceleration = _derivative(velocity)
         durations = self._piece_durations(velocity.shape[2])
-        return peak_abs(velocity, durations), peak_abs(acceleration, durations)
+        peak_velocity, peak_acceleration = peak_abs(durations, velocity, acceleration)
+        return peak_velocity, peak_acceleration
 
     def _piece_durations(self, joint_count: int) -> np.ndarray:
         """Each piece's length (s) per joint, ``(pieces, joints)``."""
@@ -113,9 +113,7 @@ class Trajectory:
     def peak_jerk(self) -> np.ndarray:
         """Largest ``|jerk|`` (rad/s³) per joint, ``(joints,)``: exact, from the coefficients."""
         jerk = _derivative(_derivative(_derivative(self.coefficients)))
-        if jerk.shape[1] == 0:
-            return np.zeros(self.joint_count)
-        return peak_abs(jerk, self._piece_durations(self.joint_count))
+        return peak_abs(self._piece_durations(self.joint_count), jerk)[0]
 
     def _sample_per_joint(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """
@@ -249,28 +247,22 @@ def _polyval(coefficients: np.ndarray, local_time: np.ndarray) -> np.ndarray:
     return value
 
 
-def peak_abs(coefficients: np.ndarray, durations: np.ndarray) -> np.ndarray:
+def peak_abs(durations: np.ndarray, *series: np.ndarray) -> list[np.ndarray]:
     """
-    Find the exact largest ``|p(t)|`` over every piece, per joint: ``(joints,)``.
+    Find the exact largest ``|p(t)|`` over every piece, per joint, for each of ``series``.
 
-    Every extremum lies at a piece end or where ``p'`` vanishes. Newton steps on ``p'`` from
-    evenly spaced seeds reach each interior root (a polynomial of degree ≤ 4 has at most
-    three); the ends and the seeds themselves stay candidates.
+    Each series is ``(pieces, n + 1, joints)`` coefficients in local time (``n ≤ 4``);
+    returns one ``(joints,)`` array per series. Every extremum lies at a piece end or
+    where ``p'`` vanishes: each piece is rescaled to unit time (``c_k L^k``) and
+    :func:`traj_gen_ros.polynomial_peaks.unit_peaks` finds the roots of ``p'`` (degree
+    ≤ 3) in closed form, every series, piece and joint in one call.
     """
-    if coefficients.shape[1] == 0:
-        return np.zeros(coefficients.shape[2])
-    fractions = np.linspace(0.0, 1.0, _PEAK_SEED_SAMPLES)[None, :, None]
-    upper = durations[:, None, :]
-    seeds = fractions * upper
-    largest = np.abs(_polyval(coefficients, seeds)).max(axis=(0, 1))
-    slope = _derivative(coefficients)
-    if slope.shape[1] < 2:
-        return largest
-    curvature = _derivative(slope)
-    refined = seeds
-    for _ in range(_PEAK_NEWTON_STEPS):
-        second = _polyval(curvature, refined)
-        safe = np.where(second == 0.0, 1.0, second)
-        step = np.where(second == 0.0, 0.0, _polyval(slope, refined) / safe)
-        refined = np.clip(refined - step, 0.0, upper)
-    return np.maximum(largest, np.abs(_polyval(coefficients, refined)).max(axis=(0, 1)))
+    pieces, joints = durations.shape
+    rows = np.zeros((len(series), pieces * joints, 5))
+    for index, coefficients in enumerate(series):
+        size = coefficients.shape[1]
+        if size:  # else a derivative of a constant: zero
+            scaled = coefficients * durations[:, None, :] ** np.arange(size)[None, :, None]
+            rows[index, :, :size] = scaled.transpose(0, 2, 1).reshape(-1, size)
+    peaks = unit_peaks(rows.reshape(-1, 5)).reshape(len(series), pieces, joints)
+    return list(peaks.max(axis=1, initial=0.0))

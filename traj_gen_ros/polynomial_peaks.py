@@ -1,0 +1,85 @@
+"""
+Exact peaks of low-degree polynomials on ``[0, 1]``, vectorised over many polynomials.
+
+The extrema of ``p`` on an interval lie at its ends or at real roots of ``p'``; for the
+degrees of Craig's profiles (``p`` of degree ≤ 4, ``p'`` of degree ≤ 3) those roots have
+closed forms: linear, the stable quadratic formula, and for the cubic the trigonometric
+formula (three real roots) or Cardano's (one). A root off by rounding moves the value
+at an extremum only to second order, so the peaks are exact to rounding. Polynomials are
+ascending coefficient rows ``(count, n)``; τ is normalised time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def unit_peaks(polynomials: np.ndarray) -> np.ndarray:
+    """Largest ``|p(τ)|`` on ``[0, 1]`` of ascending polynomials ``(count, n)``, ``n ≤ 5``."""
+    count, size = polynomials.shape
+    used = np.flatnonzero(np.abs(polynomials).max(axis=0, initial=0.0))
+    degree = int(used[-1]) if used.size else 0
+    slope = polynomials[:, 1:degree + 1] * np.arange(1, degree + 1)
+    if degree <= 1:
+        points = np.zeros((count, 0))
+    elif degree == 2:
+        points = _linear_roots(slope[:, 0], slope[:, 1])
+    elif degree == 3:
+        points = _quadratic_roots(slope[:, 0], slope[:, 1], slope[:, 2])
+    else:
+        points = _cubic_roots(slope)
+    points = np.concatenate([np.clip(points, 0.0, 1.0), np.zeros((count, 1)),
+                             np.ones((count, 1))], axis=1)
+    value = np.zeros_like(points)
+    for power in range(degree, -1, -1):
+        value = value * points + polynomials[:, power:power + 1]
+    return np.abs(value).max(axis=1)
+
+
+def _linear_roots(c0: np.ndarray, c1: np.ndarray) -> np.ndarray:
+    """Root of ``c0 + c1 τ`` per row, ``(count, 1)``; 0 where there is none."""
+    return (-c0 / np.where(c1 == 0.0, np.inf, c1))[:, None]
+
+
+def _quadratic_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> np.ndarray:
+    """
+    Real roots of ``c0 + c1 τ + c2 τ²`` per row, ``(count, 2)``; 0 where there are fewer.
+
+    Stable pair ``q = -(c1 + sgn(c1) √Δ)/2``, roots ``q/c2`` and ``c0/q``; ``c2 = 0``
+    leaves the linear root ``-c0/c1`` as the second.
+    """
+    discriminant = c1 * c1 - 4.0 * c2 * c0
+    half = -0.5 * (c1 + np.copysign(np.sqrt(np.maximum(discriminant, 0.0)), c1))
+    real = (discriminant >= 0.0) & (half != 0.0)
+    half = np.where(real, half, 1.0)
+    first = np.where(real & (c2 != 0.0), half / np.where(c2 == 0.0, 1.0, c2), 0.0)
+    return np.stack([first, np.where(real, c0 / half, 0.0)], axis=1)
+
+
+def _cubic_roots(cubics: np.ndarray) -> np.ndarray:
+    """
+    Real roots of ascending ``c0 + c1 τ + c2 τ² + c3 τ³`` (rows), ``(count, 3)``; 0 if fewer.
+
+    The depressed cubic ``t³ + p t + q`` (``τ = t - c2/(3 c3)``): three real roots by the
+    trigonometric formula when ``Δ = (q/2)² + (p/3)³ ≤ 0``, else Cardano's one. Rows whose
+    cubic term is negligible (1e-9 of the largest) are quadratics.
+    """
+    c0, c1, c2, c3 = cubics.T
+    cubic = np.abs(c3) > 1e-9 * np.abs(cubics).max(axis=1)
+    leading = np.where(cubic, c3, 1.0)
+    a, b, c = c2 / leading, c1 / leading, c0 / leading
+    p = b - a * a / 3.0
+    q = (2.0 * a * a / 27.0 - b / 3.0) * a + c
+    discriminant = 0.25 * q * q + p * p * p / 27.0
+    root = np.sqrt(np.maximum(discriminant, 0.0))
+    one = np.cbrt(-0.5 * q + root) + np.cbrt(-0.5 * q - root)
+    radius = 2.0 * np.sqrt(np.maximum(-p / 3.0, 0.0))
+    cosine = 3.0 * q / np.where(radius * p == 0.0, np.inf, p * radius)
+    angle = np.arccos(np.clip(cosine, -1.0, 1.0)) / 3.0
+    three = radius[:, None] * np.cos(angle[:, None] - _THIRDS)
+    roots = np.where((discriminant > 0.0)[:, None], one[:, None], three) - a[:, None] / 3.0
+    return np.where(cubic[:, None], roots, np.concatenate(
+        [_quadratic_roots(c0, c1, c2), np.zeros((len(c0), 1))], axis=1))
+
+
+_THIRDS = 2.0 * np.pi * np.arange(3) / 3.0
