@@ -1,5 +1,7 @@
 """Integration: the generator as a subprocess, driven over DDS by a second node."""
 
+import time
+
 from diagnostic_msgs.msg import DiagnosticStatus
 from node_harness import (
     generator_session,
@@ -63,6 +65,7 @@ def test_idle_stream_holds_still_at_rate(probe, rest):
 
 def test_goal_moves_named_joints_reaches_and_holds(probe, rest):
     goal = {'joint_5': rest[4] - 0.3, 'joint_2': rest[1] + 0.4}
+    sent_ns = time.time_ns()
     status, trajectory = probe.goal(goal)
     assert status.level == DiagnosticStatus.OK, status.message
     assert status.name == '/trajectory_generator'
@@ -72,6 +75,9 @@ def test_goal_moves_named_joints_reaches_and_holds(probe, rest):
 
     times, positions, velocities, accelerations = trajectory_arrays(trajectory)
     start_ns = stamp_ns(trajectory.header.stamp)
+    # When DDS received the goal (system clock, as the stamps here): after it was sent,
+    # before the motion's first setpoint.
+    assert sent_ns <= int(values['received']) <= start_ns
     assert list(trajectory.joint_names) == JOINTS
     assert float(values['duration']) == pytest.approx(times[-1], abs=1e-6)
     assert np.allclose(np.diff(times)[:-1], 1.0 / RATE, atol=1e-9)

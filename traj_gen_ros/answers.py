@@ -57,10 +57,18 @@ class Answers:
         self._status = node.create_publisher(
             DiagnosticStatus, '~/status', QoSProfile(depth=STATUS_DEPTH, reliability=reliable))
 
-    def values(self, kind: str, frame_id: str) -> dict[str, str]:
-        """Give a new request its id; return the values every answer to it carries."""
+    def values(self, kind: str, frame_id: str, received: int = 0) -> dict[str, str]:
+        """
+        Give a new request its id; return the values every answer to it carries.
+
+        ``received`` (ns since the epoch, system clock) is when DDS received the request;
+        0 (a service call) leaves it out.
+        """
         self._received += 1
-        return {'request': kind, 'request_id': str(self._received), 'frame_id': frame_id}
+        values = {'request': kind, 'request_id': str(self._received), 'frame_id': frame_id}
+        if received:
+            values['received'] = str(received)
+        return values
 
     def trajectory(self, start_ns: int, motion: PlannedMotion, rate_hz: float) -> bytes:
         """

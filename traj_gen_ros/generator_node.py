@@ -112,11 +112,11 @@ class TrajectoryGenerator(Node):
 
     # ------------------------------------------------------------------ requests
 
-    def _on_goal(self, message: JointState) -> None:
-        self._requests.take(self._goal_subscription, JointState, False, message)
+    def _on_goal(self, message: JointState, info: dict) -> None:
+        self._requests.take(self._goal_subscription, JointState, False, (message, info))
 
-    def _on_via_points(self, data: bytes) -> None:
-        self._requests.take(self._via_subscription, JointTrajectory, True, data)
+    def _on_via_points(self, data: bytes, info: dict) -> None:
+        self._requests.take(self._via_subscription, JointTrajectory, True, (data, info))
 
     def _on_stop(self, request: Trigger.Request, response: Trigger.Response
                  ) -> Trigger.Response:

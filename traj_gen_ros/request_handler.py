@@ -66,8 +66,8 @@ REQUEST_ROUND_PERIOD = 0.005
 #: A new motion starts at the first tick at least the median planning and sampling time
 #: of the last RECENT requests away, so that it is ready by then (a few hundred us: most
 #: often the very next tick). One whose start tick the stream passed while it was planned
-#: anyway is planned again from a later tick (twice the time it took, at most
-#: MAX_MARGIN_NS away), at most PLAN_ATTEMPTS times in all.
+#: anyway is planned again from a later tick (as long again as it took, then twice as
+#: long, at most MAX_MARGIN_NS away), at most PLAN_ATTEMPTS times in all.
 RECENT = 5
 MAX_MARGIN_NS = 500_000_000
 PLAN_ATTEMPTS = 3
@@ -100,18 +100,25 @@ class RequestHandler:
     # ------------------------------------------------------------------ take and parse
 
     def take(self, subscription: Subscription, message_type: type, raw: bool,
-             first: object) -> None:
-        """Parse ``first`` and every request waiting behind it; execute the newest valid one."""
+             first: tuple[object, dict]) -> None:
+        """
+        Parse ``first`` and every request waiting behind it; execute the newest valid one.
+
+        Each is a ``(message, message info)`` pair; the info's ``received_timestamp`` (ns,
+        system clock: when DDS received it) goes into the answer as ``received``.
+        """
         parse = self._parse_via if raw else self._parse_goal
         try:
-            parsed = [parse(first)]
+            taken = first
+            parsed = []
             with subscription.handle:
-                for _ in range(REQUEST_DEPTH):
+                for _ in range(REQUEST_DEPTH + 1):
+                    request = parse(taken[0], taken[1].get('received_timestamp', 0))
+                    if request is not None:
+                        parsed.append(request)
                     taken = subscription.handle.take_message(message_type, raw)
                     if taken is None:
                         break
-                    parsed.append(parse(taken[0]))
-            parsed = [request for request in parsed if request is not None]
             if parsed:
                 self._answers.superseded(parsed[:-1])
                 newest = parsed[-1]
@@ -127,9 +134,9 @@ class RequestHandler:
             time.sleep(rest)
         self._last_round = time.monotonic()
 
-    def _parse_goal(self, message: JointState) -> Request | None:
-        request = Request('goal', self._answers.values('goal', message.header.frame_id), 0,
-                          None)
+    def _parse_goal(self, message: JointState, received: int) -> Request | None:
+        request = Request('goal', self._answers.values('goal', message.header.frame_id,
+                                                       received), 0, None)
         try:
             request.request = parse_goal(self._config().joints, message.name, message.position)
         except RequestError as error:
@@ -137,24 +144,21 @@ class RequestHandler:
             return None
         return request
 
-    def _parse_via(self, data: bytes) -> Request | None:
+    def _parse_via(self, data: bytes, received: int) -> Request | None:
         frame_id, count = peek_via_points(data)
+        values = self._answers.values('via_points', frame_id, received)
         if count > MAX_VIA_POINTS:  # refused before one Python object per point is made
-            request = Request('via_points', self._answers.values('via_points', frame_id), 0,
-                              None)
-            self._answers.refused(request, too_many_points(count))
+            self._answers.refused(Request('via_points', values, 0, None), too_many_points(count))
             return None
         try:
             message = deserialize_message(data, JointTrajectory)
         except Exception as error:  # noqa: BLE001 - bytes from the wire must never kill the node
-            request = Request('via_points', self._answers.values('via_points', frame_id), 0,
-                              None)
-            self._answers.refused(request, f'malformed message: {error}')
+            self._answers.refused(Request('via_points', values, 0, None),
+                                  f'malformed message: {error}')
             return None
         stamp = message.header.stamp
         stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # 0 or past: "now"
-        request = Request('via_points', self._answers.values(
-            'via_points', message.header.frame_id), stamp_ns, None)
+        request = Request('via_points', values, stamp_ns, None)
         points = [(p.positions, p.velocities, p.accelerations, _seconds(p.time_from_start))
                   for p in message.points]
         try:
@@ -194,7 +198,7 @@ class RequestHandler:
                          ) -> tuple[PlannedMotion, int, int] | None:
         """Return the motion spliced in, the time it was planned and its start (ns)."""
         margin_ns = int(statistics.median(self._recent_ns))
-        for _ in range(PLAN_ATTEMPTS):
+        for attempt in range(1, PLAN_ATTEMPTS + 1):
             began = time.perf_counter_ns()
             now_ns = self._now_ns()
             start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
@@ -215,7 +219,9 @@ class RequestHandler:
             if self._stream.splice(start_ns, motion):
                 self._recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
                 return motion, now_ns, start_ns
-            margin_ns = min(2 * elapsed_ns, MAX_MARGIN_NS)
+            # The next attempt runs warm (code and data in cache): about as long again is
+            # usually enough; the last one gets twice as long.
+            margin_ns = min(attempt * elapsed_ns, MAX_MARGIN_NS)
         self._answers.refused(request, f'the stream passed its start {PLAN_ATTEMPTS} times '
                               f'while it was planned (last margin {margin_ns * 1e-9:.3f} s); '
                               'resend it')
