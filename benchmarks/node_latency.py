@@ -55,7 +55,7 @@ os.environ['ROS_DOMAIN_ID'] = os.environ.setdefault('NODE_LATENCY_DOMAIN',
                                                     os.environ['ROS_DOMAIN_ID'])
 RELIABLE = ReliabilityPolicy.RELIABLE
 GENERATOR = '/trajectory_generator'
-PROFILES = ('cubic', 'quintic', 'lspb')
+PROFILES = ('cubic', 'quintic', 'lspb', 'scurve')
 BUSY = 'while True: pass'
 
 
