@@ -14,6 +14,7 @@ import pytest
 from traj_gen_ros import cubic, quintic
 from traj_gen_ros.move_peaks import peaks
 from traj_gen_ros.polynomial_candidates import _interior_polynomials, candidates
+from traj_gen_ros.polynomial_timing import synchronised_duration
 
 # Position in normalised time τ, per term (ascending in τ): Craig's quintic (eq. 7.3-7.5)
 # and cubic (eq. 7.9) to rest, as D·m_D + v0 T·m_v + a0 T²·m_a.
@@ -138,3 +139,14 @@ def test_feasibility_changes_only_at_candidates(profile):
             assert np.any((found >= low * (1 - 1e-9)) & (found <= high * (1 + 1e-9))), \
                 (d, v, a, max_velocity, max_acceleration, low, high, found)
     assert flips > 20  # the check did meet windows and boundaries
+
+
+@pytest.mark.parametrize('runs, expected', [
+    # joint 0: [1, 2] and [3, inf); joint 1: [2, 4] and the single duration 5
+    ([[1.0, 3.0, 2.0, 5.0], [2.0, np.inf, 4.0, 5.0], [0, 0, 1, 1]], 2.0),
+    ([[1.0, 2.5], [2.0, 3.0], [0, 1]], None),              # disjoint: none in common
+    ([[1.0, 2.0], [2.0, 3.0], [0, 1]], 2.0),               # closed runs touching at 2
+    ([[1.0, 7.0, 3.0], [2.0, 7.0, np.inf], [0, 0, 1]], 7.0),  # a single feasible duration
+])
+def test_synchronised_duration_is_the_smallest_common_one(runs, expected):
+    assert synchronised_duration(np.array(runs), 2) == expected

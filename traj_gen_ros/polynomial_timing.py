@@ -101,12 +101,14 @@ def _polish(profile: str, moves: tuple, durations: np.ndarray, owners: np.ndarra
     who = owners[index]
     bad = durations[index]
     direction = np.where(rising[index], 1.0, -1.0)
+    inside_gap = np.where(rising[index], gaps[index], gaps[index - 1])
     tries = bad[:, None] * (1.0 + direction[:, None] * _NUDGES)
     fits = _feasible(profile, moves, np.repeat(who, _NUDGES.size), tries.reshape(-1),
                      0.5 * LIMIT_TOLERANCE).reshape(tries.shape)
+    # Only nudges that stay within the gap (short of its test duration) count.
+    fits &= (tries - inside_gap[:, None]) * direction[:, None] <= 0.0
     nudged = fits.any(axis=1)
-    good = np.where(nudged, tries[np.arange(index.size), np.argmax(fits, axis=1)],
-                    np.where(rising[index], gaps[index], gaps[index - 1]))
+    good = np.where(nudged, tries[np.arange(index.size), np.argmax(fits, axis=1)], inside_gap)
     # Else bisect between the candidate and its gap's test duration (rarely needed).
     hard = np.flatnonzero(~nudged)
     low, high = bad[hard], good[hard]
@@ -126,12 +128,16 @@ def synchronised_duration(runs: np.ndarray, joints: int) -> float | None:
     Return the smallest duration in a run of every one of ``joints``, or ``None``.
 
     The answer, if any, is a run's start; a joint's runs are disjoint, so a start lies in
-    a run of every joint exactly when ``joints`` runs contain it.
+    a run of every joint exactly when ``joints`` runs contain it. ``O(runs log runs)``.
     """
-    starts = np.sort(runs[0])
-    inside = (runs[0] <= starts[:, None]) & (starts[:, None] <= runs[1])
-    common = np.flatnonzero(np.count_nonzero(inside, axis=1) == joints)
-    return float(starts[common[0]]) if common.size else None
+    # Sweep: +1 at each run's start, -1 at its end; at equal times starts come first
+    # (closed runs), so the count after a start is the number of runs containing it.
+    times = np.concatenate([runs[0], runs[1]])
+    steps = np.concatenate([np.ones(runs.shape[1]), -np.ones(runs.shape[1])])
+    order = np.lexsort((-steps, times))
+    inside = np.cumsum(steps[order])
+    common = np.flatnonzero((inside == joints) & (steps[order] > 0.0))
+    return float(times[order][common[0]]) if common.size else None
 
 
 def minimum_duration(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
