@@ -119,12 +119,21 @@ def test_peaks_equal_peaks_from_numpy_roots(profile):
 def test_feasibility_changes_only_at_candidates(profile):
     rng = np.random.default_rng(5)
     flips = 0
-    for _ in range(40):
+    for case in range(60):
         d = rng.normal()
         v, a = rng.normal() * 0.6, (rng.normal() if profile == 'quintic' else 0.0)
         max_velocity, max_acceleration = rng.uniform(0.5, 2.0), rng.uniform(1.0, 4.0)
         v = np.clip(v, -max_velocity, max_velocity)
         a = np.clip(a, -max_acceleration, max_acceleration)
+        # The degenerate cases, each with its own resultant or a start at a limit.
+        if case % 5 == 1:
+            d = 0.0
+        elif case % 5 == 2:
+            a = 0.0
+        elif case % 5 == 3:
+            v = np.copysign(max_velocity, rng.normal())
+        elif case % 5 == 4 and profile == 'quintic':
+            a = np.copysign(max_acceleration, rng.normal())
         moves = [np.array([x]) for x in (d, v, a, max_velocity, max_acceleration)]
         found, _ = candidates(profile, *moves)
         grid = np.geomspace(1e-2, 1e2, 4000)
@@ -150,3 +159,17 @@ def test_feasibility_changes_only_at_candidates(profile):
 ])
 def test_synchronised_duration_is_the_smallest_common_one(runs, expected):
     assert synchronised_duration(np.array(runs), 2) == expected
+
+
+def test_trajectory_peaks_with_a_tiny_cubic_term_in_the_slope():
+    """A quintic whose velocity's quartic term is ~1e-8 of the rest (the review's case)."""
+    plan = quintic([0.0], [1.0 + 1e-8 / 6.0], 1.0, v0=[0.0], a0=[12.0])
+    velocity, acceleration = plan.peaks()
+    expected = helpers.reference_peaks(plan)
+    np.testing.assert_allclose([velocity[0], acceleration[0]],
+                               [expected[0][0], expected[1][0]], rtol=1e-9)
+    assert velocity[0] == pytest.approx(16.0 / 9.0, rel=1e-7)  # at t = 1/3
+    for ratio in (1e-9, 1e-8, 1e-7, 1e-6, 1e-4):
+        plan = quintic([0.0], [1.0 + ratio], 1.0, v0=[0.3], a0=[-5.0])
+        expected = helpers.reference_peaks(plan)
+        np.testing.assert_allclose(plan.peaks()[0], expected[0], rtol=1e-9)

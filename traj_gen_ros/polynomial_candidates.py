@@ -96,6 +96,10 @@ def _positive_roots(p2: np.ndarray, p1: np.ndarray, p0: np.ndarray) -> np.ndarra
     linear root ``-p0/p1`` is the second). A negative ``Δ`` within rounding counts as a
     double root; complex pairs, divisions by zero and NaN give no positive root.
     """
+    # Divided by the largest coefficient per row: Δ cannot overflow; the roots are unchanged.
+    scale = np.maximum(np.maximum(np.abs(p2), np.abs(p1)), np.abs(p0))
+    scale = np.where((scale > 0.0) & np.isfinite(scale), scale, 1.0)
+    p2, p1, p0 = p2 / scale, p1 / scale, p0 / scale
     square = p1 * p1
     product = 4.0 * p2 * p0
     discriminant = square - product

@@ -6,7 +6,8 @@ degrees of Craig's profiles (``p`` of degree ≤ 4, ``p'`` of degree ≤ 3) thos
 closed forms: linear, the stable quadratic formula, and for the cubic the trigonometric
 formula (three real roots) or Cardano's (one). A root off by rounding moves the value
 at an extremum only to second order, so the peaks are exact to rounding. Polynomials are
-ascending coefficient rows ``(count, n)``; τ is normalised time.
+ascending coefficient rows ``(count, n)``; τ is normalised time. The cubic formulas are the
+classical ones (e.g. Press et al., *Numerical Recipes*, 3rd ed., §5.6).
 """
 
 from __future__ import annotations
@@ -27,13 +28,35 @@ def unit_peaks(polynomials: np.ndarray) -> np.ndarray:
     elif degree == 3:
         points = _quadratic_roots(slope[:, 0], slope[:, 1], slope[:, 2])
     else:
-        points = _cubic_roots(slope)
+        # The trigonometric/Cardano roots lose the small roots when the cubic term is
+        # tiny beside the others (their error grows like √eps over its relative size):
+        # the roots of the quadratic part are candidates too, and two Newton steps on p'
+        # polish every candidate. Extra candidates in [0, 1] can only raise the maximum
+        # towards the true one; it is attained at one of them.
+        points = np.concatenate([_cubic_roots(slope), _quadratic_roots(
+            slope[:, 0], slope[:, 1], slope[:, 2])], axis=1)
+        points = _polished(slope, np.clip(points, 0.0, 1.0))
     points = np.concatenate([np.clip(points, 0.0, 1.0), np.zeros((count, 1)),
                              np.ones((count, 1))], axis=1)
     value = np.zeros_like(points)
     for power in range(degree, -1, -1):
         value = value * points + polynomials[:, power:power + 1]
     return np.abs(value).max(axis=1)
+
+
+def _polished(slope: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Two Newton steps on ``p'`` (ascending ``slope`` rows) from ``points``, kept in [0, 1]."""
+    curvature = slope[:, 1:] * np.arange(1, slope.shape[1])
+    for _ in range(2):
+        value = np.zeros_like(points)
+        bend = np.zeros_like(points)
+        for power in range(slope.shape[1] - 1, -1, -1):
+            value = value * points + slope[:, power:power + 1]
+        for power in range(curvature.shape[1] - 1, -1, -1):
+            bend = bend * points + curvature[:, power:power + 1]
+        step = value / np.where(bend == 0.0, np.inf, bend)
+        points = np.clip(points - step, 0.0, 1.0)
+    return points
 
 
 def _linear_roots(c0: np.ndarray, c1: np.ndarray) -> np.ndarray:
@@ -48,12 +71,20 @@ def _quadratic_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> np.ndarr
     Stable pair ``q = -(c1 + sgn(c1) √Δ)/2``, roots ``q/c2`` and ``c0/q``; ``c2 = 0``
     leaves the linear root ``-c0/c1`` as the second.
     """
+    c0, c1, c2 = _normalised(c0, c1, c2)
     discriminant = c1 * c1 - 4.0 * c2 * c0
     half = -0.5 * (c1 + np.copysign(np.sqrt(np.maximum(discriminant, 0.0)), c1))
     real = (discriminant >= 0.0) & (half != 0.0)
     half = np.where(real, half, 1.0)
     first = np.where(real & (c2 != 0.0), half / np.where(c2 == 0.0, 1.0, c2), 0.0)
     return np.stack([first, np.where(real, c0 / half, 0.0)], axis=1)
+
+
+def _normalised(*coefficients: np.ndarray) -> list[np.ndarray]:
+    """Coefficient arrays divided by their largest magnitude per row (no overflow in Δ)."""
+    scale = np.maximum.reduce([np.abs(c) for c in coefficients])
+    scale = np.where((scale > 0.0) & np.isfinite(scale), scale, 1.0)
+    return [c / scale for c in coefficients]
 
 
 def _cubic_roots(cubics: np.ndarray) -> np.ndarray:

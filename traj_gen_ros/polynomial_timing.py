@@ -30,13 +30,17 @@ _FIRST_BATCH = 16  # joints analysed exactly at first (the largest lower bounds)
 _NUDGES = 1e-15 * 3.0 ** np.arange(25)  # 1e-15 … 2.8e-4
 
 
-def _feasible(profile: str, moves: tuple, who: np.ndarray, durations: np.ndarray,
-              tolerance: float = LIMIT_TOLERANCE) -> np.ndarray:
-    """Whether move ``who[k]`` stays within its limits in ``durations[k]`` (exact peaks)."""
+def _feasible(profile: str, moves: tuple, who: np.ndarray, durations: np.ndarray) -> np.ndarray:
+    """
+    Whether move ``who[k]`` stays within its limits in ``durations[k]`` (exact peaks).
+
+    Within half of ``LIMIT_TOLERANCE``: the plan's own peaks, computed again from its
+    coefficients in real time (the node checks every plan), round apart from these.
+    """
     displacement, velocity, acceleration, max_velocity, max_acceleration = moves
     peak_velocity, peak_acceleration = peaks(profile, displacement[who], velocity[who],
                                              acceleration[who], durations)
-    slack = 1.0 + tolerance
+    slack = 1.0 + 0.5 * LIMIT_TOLERANCE
     return (peak_velocity <= max_velocity[who] * slack) & \
         (peak_acceleration <= max_acceleration[who] * slack)
 
@@ -90,8 +94,9 @@ def _polish(profile: str, moves: tuple, durations: np.ndarray, owners: np.ndarra
     A candidate next to a feasible gap is, exactly, the gap's closed end; rounding can
     leave it a hair outside (the peak over by ~1e-12). Each such candidate is moved
     towards its gap by the smallest relative nudge in :data:`_NUDGES` that makes it
-    feasible (all tried at once), else bisected towards the gap's test duration (48
-    halvings). In place; the order is kept.
+    feasible (all tried at once); where that nudge is coarse (above 1e-9) or none works,
+    the boundary is bisected within the bracket (48 halvings). In place; the order is
+    kept.
     """
     rising = ~at_point & after
     falling = ~at_point & before & ~rising
@@ -103,19 +108,23 @@ def _polish(profile: str, moves: tuple, durations: np.ndarray, owners: np.ndarra
     direction = np.where(rising[index], 1.0, -1.0)
     inside_gap = np.where(rising[index], gaps[index], gaps[index - 1])
     tries = bad[:, None] * (1.0 + direction[:, None] * _NUDGES)
-    fits = _feasible(profile, moves, np.repeat(who, _NUDGES.size), tries.reshape(-1),
-                     0.5 * LIMIT_TOLERANCE).reshape(tries.shape)
+    fits = _feasible(profile, moves, np.repeat(who, _NUDGES.size),
+                     tries.reshape(-1)).reshape(tries.shape)
     # Only nudges that stay within the gap (short of its test duration) count.
     fits &= (tries - inside_gap[:, None]) * direction[:, None] <= 0.0
     nudged = fits.any(axis=1)
-    good = np.where(nudged, tries[np.arange(index.size), np.argmax(fits, axis=1)], inside_gap)
-    # Else bisect between the candidate and its gap's test duration (rarely needed).
-    hard = np.flatnonzero(~nudged)
-    low, high = bad[hard], good[hard]
+    first = np.argmax(fits, axis=1)
+    good = np.where(nudged, tries[np.arange(index.size), first], inside_gap)
+    # A nudge above 1e-9 (the candidate was off) or none at all: bisect from the last
+    # nudge that failed (or the candidate) to the first that worked (or the gap's test
+    # duration), 48 halvings. Rare: ill-conditioned roots, e.g. starts exactly at a limit.
+    coarse = ~nudged | (_NUDGES[first] > 1e-9)
+    hard = np.flatnonzero(coarse)
+    low = np.where(nudged & (first > 0), tries[np.arange(index.size), first - 1], bad)[hard]
+    high = good[hard]
     for _ in range(48 if hard.size else 0):
         middle = 0.5 * (low + high)
-        # Half the tolerance: the plan's own peaks, evaluated in real time, round apart.
-        fits = _feasible(profile, moves, who[hard], middle, 0.5 * LIMIT_TOLERANCE)
+        fits = _feasible(profile, moves, who[hard], middle)
         high = np.where(fits, middle, high)
         low = np.where(fits, low, middle)
     good[hard] = high

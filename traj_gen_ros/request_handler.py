@@ -66,8 +66,8 @@ REQUEST_ROUND_PERIOD = 0.005
 #: A new motion starts at the first tick at least the median planning and sampling time
 #: of the last RECENT requests away, so that it is ready by then (a few hundred us: most
 #: often the very next tick). One whose start tick the stream passed while it was planned
-#: anyway is planned again from a later tick (as long again as it took, then twice as
-#: long, at most MAX_MARGIN_NS away), at most PLAN_ATTEMPTS times in all.
+#: anyway is planned again from a later tick (twice the time it took, at most
+#: MAX_MARGIN_NS away), at most PLAN_ATTEMPTS times in all.
 RECENT = 5
 MAX_MARGIN_NS = 500_000_000
 PLAN_ATTEMPTS = 3
@@ -109,16 +109,16 @@ class RequestHandler:
         """
         parse = self._parse_via if raw else self._parse_goal
         try:
-            taken = first
-            parsed = []
+            waiting = [first]
             with subscription.handle:
-                for _ in range(REQUEST_DEPTH + 1):
-                    request = parse(taken[0], taken[1].get('received_timestamp', 0))
-                    if request is not None:
-                        parsed.append(request)
+                for _ in range(REQUEST_DEPTH):
                     taken = subscription.handle.take_message(message_type, raw)
                     if taken is None:
                         break
+                    waiting.append(taken)
+            parsed = [parse(message, info.get('received_timestamp', 0))
+                      for message, info in waiting]
+            parsed = [request for request in parsed if request is not None]
             if parsed:
                 self._answers.superseded(parsed[:-1])
                 newest = parsed[-1]
@@ -198,7 +198,7 @@ class RequestHandler:
                          ) -> tuple[PlannedMotion, int, int] | None:
         """Return the motion spliced in, the time it was planned and its start (ns)."""
         margin_ns = int(statistics.median(self._recent_ns))
-        for attempt in range(1, PLAN_ATTEMPTS + 1):
+        for _ in range(PLAN_ATTEMPTS):
             began = time.perf_counter_ns()
             now_ns = self._now_ns()
             start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
@@ -219,11 +219,10 @@ class RequestHandler:
             if self._stream.splice(start_ns, motion):
                 self._recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
                 return motion, now_ns, start_ns
-            # The next attempt runs warm (code and data in cache): about as long again is
-            # usually enough; the last one gets twice as long.
-            margin_ns = min(attempt * elapsed_ns, MAX_MARGIN_NS)
+            used_ns = margin_ns
+            margin_ns = min(2 * elapsed_ns, MAX_MARGIN_NS)
         self._answers.refused(request, f'the stream passed its start {PLAN_ATTEMPTS} times '
-                              f'while it was planned (last margin {margin_ns * 1e-9:.3f} s); '
+                              f'while it was planned (last margin {used_ns * 1e-9:.3f} s); '
                               'resend it')
         return None
 

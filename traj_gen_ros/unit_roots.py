@@ -4,23 +4,25 @@ Real roots on ``[0, 1]`` of many polynomials of degree ≤ 9 at once.
 The timing of a cubic or quintic from a moving state needs the roots in normalised time
 ``τ ∈ [0, 1]`` of a few dozen resultant polynomials (:mod:`traj_gen_ros.polynomial_timing`).
 An eigenvalue problem per polynomial costs ~15 µs each; this module isolates the roots in
-a handful of vectorised steps instead, and provably finds every simple root:
+a handful of vectorised steps instead:
 
 1. Bernstein coefficients on 32 equal pieces of ``[0, 1]`` (one matrix product). A
    polynomial's values on a piece lie in the convex hull of its Bernstein coefficients
    there, and the number of roots in the piece is at most the number of sign changes of
-   those coefficients, with the same parity (Descartes' rule in the Bernstein basis).
-   So a piece whose coefficients share a sign has no root, and one with exactly one sign
-   change has exactly one.
-2. Pieces with more changes (close roots, near-double roots) are split into eighths, up to
-   three times (pieces of 6e-5).
-3. Each piece with one root: Newton's method kept inside the shrinking bracket, to
-   machine precision.
+   those coefficients, with the same parity (Descartes' rule of signs in the Bernstein
+   basis; Lane and Riesenfeld, "Bounds on a polynomial", BIT 21, 1981; Farouki and
+   Rajan, CAGD 5, 1988). So a piece whose coefficients share a sign has no root, and one
+   with exactly one sign change has exactly one.
+2. Pieces with more changes (close roots, near-double roots) are split into eighths once
+   (pieces of 1/256).
+3. Each piece with one root: Newton's method inside it, to machine precision.
 
-A polynomial that still has an unresolved piece (roots closer than 6e-5, a root at a
-piece's end, a double root) has all its roots computed by its companion matrix's
-eigenvalues instead, counting roots within 1e-6 of the real axis as real, so a touching
-root is a candidate too. Either way no root in ``[0, 1]`` is missed.
+A polynomial that still has an unresolved piece (close roots, a root at a piece's end, a
+double root) has all its roots computed by its companion matrix's eigenvalues instead,
+counting roots within 1e-6 of the real axis as real. So every root where the polynomial
+changes sign is found, and touching roots that the rounded polynomial still reaches; a
+root of even multiplicity that rounding lifts off zero can be missed, and there the sign
+does not change.
 """
 
 from __future__ import annotations
@@ -130,6 +132,8 @@ def quadratic_roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarra
     ``c0/q``); a double root counts (``Δ`` within rounding of 0), linear rows give
     ``-c0/c1``. Identically zero rows give none.
     """
+    scale = np.abs(polynomials[:, :3]).max(axis=1, initial=0.0)
+    polynomials = polynomials / np.where((scale > 0.0) & np.isfinite(scale), scale, 1.0)[:, None]
     c0, c1, c2 = polynomials[:, 0], polynomials[:, 1], polynomials[:, 2]
     discriminant = c1 * c1 - 4.0 * c2 * c0
     real = discriminant >= -1e-12 * (c1 * c1 + np.abs(4.0 * c2 * c0))
