@@ -20,6 +20,7 @@ rad/s, rad/s², s.
 from __future__ import annotations
 
 import numpy as np
+from traj_gen_ros.polynomial_peaks import discriminant
 
 
 def _unit_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> np.ndarray:
@@ -29,15 +30,10 @@ def _unit_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> np.ndarray:
     A root outside ``[0, 1]`` clipped to an end only adds that end, which is checked
     anyway; a missing root is replaced by ``τ = 0``, likewise harmless.
     """
-    # Divided by the largest coefficient per row: Δ cannot overflow (a huge D over a
-    # tiny T), and the roots are unchanged.
-    scale = np.maximum(np.maximum(np.abs(c0), np.abs(c1)), np.abs(c2))
-    scale = np.where((scale > 0.0) & np.isfinite(scale), scale, 1.0)
-    c0, c1, c2 = c0 / scale, c1 / scale, c2 / scale
-    discriminant = c1 * c1 - 4.0 * c2 * c0
-    root = np.sqrt(np.abs(discriminant))
+    delta, c0, c1, c2 = discriminant(c0, c1, c2)  # rescaled where it would overflow
+    root = np.sqrt(np.abs(delta))
     half = -0.5 * (c1 + np.copysign(root, c1))
-    real = (discriminant >= 0.0) & (half != 0.0)
+    real = (delta >= 0.0) & (half != 0.0)
     square = real & (c2 != 0.0)
     safe_half = np.where(real, half, 1.0)
     first = np.where(square, safe_half / np.where(square, c2, 1.0), 0.0)

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 from traj_gen_ros.polynomial import CUBIC_MATRIX, QUINTIC_MATRIX
+from traj_gen_ros.polynomial_peaks import discriminant
 from traj_gen_ros.unit_roots import quadratic_roots_in_unit_interval, roots_in_unit_interval
 
 
@@ -96,20 +97,14 @@ def _positive_roots(p2: np.ndarray, p1: np.ndarray, p0: np.ndarray) -> np.ndarra
     linear root ``-p0/p1`` is the second). A negative ``Δ`` within rounding counts as a
     double root; complex pairs, divisions by zero and NaN give no positive root.
     """
-    # Divided by the largest coefficient per row: Δ cannot overflow; the roots are unchanged.
-    scale = np.maximum(np.maximum(np.abs(p2), np.abs(p1)), np.abs(p0))
-    scale = np.where((scale > 0.0) & np.isfinite(scale), scale, 1.0)
-    p2, p1, p0 = p2 / scale, p1 / scale, p0 / scale
-    square = p1 * p1
-    product = 4.0 * p2 * p0
-    discriminant = square - product
-    half = -0.5 * (p1 + np.copysign(np.sqrt(np.maximum(discriminant, 0.0)), p1))
+    delta, p0, p1, p2 = discriminant(p0, p1, p2)  # rescaled where it would overflow
+    half = -0.5 * (p1 + np.copysign(np.sqrt(np.maximum(delta, 0.0)), p1))
     roots = np.empty((2, p1.size))
     # Divisions by 0 give inf or NaN, which the caller drops (no positive finite root).
     with np.errstate(divide='ignore', invalid='ignore'):
         np.divide(half, p2, out=roots[0])
         np.divide(p0, half, out=roots[1])
-    roots[:, discriminant < -1e-12 * (square + np.abs(product))] = np.nan
+    roots[:, delta < -1e-12 * (p1 * p1 + np.abs(4.0 * p2 * p0))] = np.nan
     return roots
 
 

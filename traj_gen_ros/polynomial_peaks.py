@@ -71,20 +71,29 @@ def _quadratic_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> np.ndarr
     Stable pair ``q = -(c1 + sgn(c1) √Δ)/2``, roots ``q/c2`` and ``c0/q``; ``c2 = 0``
     leaves the linear root ``-c0/c1`` as the second.
     """
-    c0, c1, c2 = _normalised(c0, c1, c2)
-    discriminant = c1 * c1 - 4.0 * c2 * c0
-    half = -0.5 * (c1 + np.copysign(np.sqrt(np.maximum(discriminant, 0.0)), c1))
-    real = (discriminant >= 0.0) & (half != 0.0)
+    delta, c0, c1, c2 = discriminant(c0, c1, c2)
+    half = -0.5 * (c1 + np.copysign(np.sqrt(np.maximum(delta, 0.0)), c1))
+    real = (delta >= 0.0) & (half != 0.0)
     half = np.where(real, half, 1.0)
     first = np.where(real & (c2 != 0.0), half / np.where(c2 == 0.0, 1.0, c2), 0.0)
     return np.stack([first, np.where(real, c0 / half, 0.0)], axis=1)
 
 
-def _normalised(*coefficients: np.ndarray) -> list[np.ndarray]:
-    """Coefficient arrays divided by their largest magnitude per row (no overflow in Δ)."""
-    scale = np.maximum.reduce([np.abs(c) for c in coefficients])
+def discriminant(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> tuple[np.ndarray, ...]:
+    """
+    Return ``c1² - 4 c2 c0`` with the coefficients it was computed from.
+
+    Where it overflows (huge coefficients: a long move over a tiny duration) the rows are
+    divided by their largest coefficient first; the roots do not change.
+    """
+    with np.errstate(over='ignore', invalid='ignore'):  # checked right below
+        value = c1 * c1 - 4.0 * c2 * c0
+    if np.isfinite(value).all():
+        return value, c0, c1, c2
+    scale = np.maximum(np.maximum(np.abs(c0), np.abs(c1)), np.abs(c2))
     scale = np.where((scale > 0.0) & np.isfinite(scale), scale, 1.0)
-    return [c / scale for c in coefficients]
+    c0, c1, c2 = c0 / scale, c1 / scale, c2 / scale
+    return c1 * c1 - 4.0 * c2 * c0, c0, c1, c2
 
 
 def _cubic_roots(cubics: np.ndarray) -> np.ndarray:

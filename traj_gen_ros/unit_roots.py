@@ -31,6 +31,7 @@ import functools
 import math
 
 import numpy as np
+from traj_gen_ros.polynomial_peaks import discriminant
 
 _PIECES = 32  # first subdivision of [0, 1]
 _SPLIT = 8  # each unresolved piece is split into this many
@@ -132,12 +133,9 @@ def quadratic_roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarra
     ``c0/q``); a double root counts (``Δ`` within rounding of 0), linear rows give
     ``-c0/c1``. Identically zero rows give none.
     """
-    scale = np.abs(polynomials[:, :3]).max(axis=1, initial=0.0)
-    polynomials = polynomials / np.where((scale > 0.0) & np.isfinite(scale), scale, 1.0)[:, None]
-    c0, c1, c2 = polynomials[:, 0], polynomials[:, 1], polynomials[:, 2]
-    discriminant = c1 * c1 - 4.0 * c2 * c0
-    real = discriminant >= -1e-12 * (c1 * c1 + np.abs(4.0 * c2 * c0))
-    half = -0.5 * (c1 + np.copysign(np.sqrt(np.maximum(discriminant, 0.0)), c1))
+    delta, c0, c1, c2 = discriminant(polynomials[:, 0], polynomials[:, 1], polynomials[:, 2])
+    real = delta >= -1e-12 * (c1 * c1 + np.abs(4.0 * c2 * c0))
+    half = -0.5 * (c1 + np.copysign(np.sqrt(np.maximum(delta, 0.0)), c1))
     usable = real & (half != 0.0)
     half = np.where(usable, half, 1.0)
     roots = np.stack([np.where(usable & (c2 != 0.0), half / np.where(c2 != 0.0, c2, 1.0),
