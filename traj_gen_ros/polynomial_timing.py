@@ -175,7 +175,9 @@ def minimum_duration(profile: str, displacement: np.ndarray, start_velocity: np.
         duration, hopeless = _common_duration(profile, moves, analysed)
         if duration is None:
             return None, hopeless
-        rest = np.setdiff1d(order, analysed)
+        unanalysed = np.ones(joints, dtype=bool)
+        unanalysed[analysed] = False
+        rest = order[unanalysed[order]]
         binding = rest[bounds[rest] > duration]
         if not binding.size:
             binding = rest[~_feasible(profile, moves, rest, np.full(rest.size, duration))]

@@ -157,7 +157,8 @@ class Trajectory:
         """
         if self.breakpoints.ndim == 1:
             return self.breakpoints, self.coefficients
-        union = np.unique(self.breakpoints)
+        union = np.sort(self.breakpoints, axis=None)  # sorted, repeats dropped below
+        union = union[np.concatenate([[True], union[1:] != union[:-1]])]
         if union.size == 1:  # zero duration: one zero-length piece, each joint's last
             union = np.repeat(union, 2)
         starts = union[:-1]
