@@ -25,20 +25,19 @@ from traj_gen_ros.polynomial_peaks import discriminant
 
 def _unit_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> np.ndarray:
     """
-    Roots of ``c0 + c1 τ + c2 τ²`` clipped to ``[0, 1]``, ``(count, 2)``; 0 where none.
+    Roots of ``c0 + c1 τ + c2 τ²`` clipped to ``[0, 1]``, ``(2, count)``; 0 where none.
 
     A root outside ``[0, 1]`` clipped to an end only adds that end, which is checked
     anyway; a missing root is replaced by ``τ = 0``, likewise harmless.
     """
     delta, c0, c1, c2 = discriminant(c0, c1, c2)  # rescaled where it would overflow
-    root = np.sqrt(np.abs(delta))
-    half = -0.5 * (c1 + np.copysign(root, c1))
+    half = -0.5 * (c1 + np.copysign(np.sqrt(np.abs(delta)), c1))
+    # No real root (or half = 0, then c1 = c0 = 0 or none): both divisions are skipped.
     real = (delta >= 0.0) & (half != 0.0)
-    square = real & (c2 != 0.0)
-    safe_half = np.where(real, half, 1.0)
-    first = np.where(square, safe_half / np.where(square, c2, 1.0), 0.0)
-    second = np.where(real, c0 / safe_half, 0.0)
-    return np.clip(np.stack([first, second], axis=1), 0.0, 1.0)
+    roots = np.zeros((2, c0.size))
+    np.divide(half, c2, out=roots[0], where=real & (c2 != 0.0))
+    np.divide(c0, half, out=roots[1], where=real)
+    return np.minimum(np.maximum(roots, 0.0), 1.0)
 
 
 def peaks(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
@@ -49,7 +48,8 @@ def peaks(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
     if profile == 'cubic':
         beta = 6.0 * displacement * inverse - 3.0 * alpha
         # dv/dτ = (β - α) - 2βτ: one interior extremum.
-        extremum = np.clip((beta - alpha) / np.where(beta == 0.0, 1.0, 2.0 * beta), 0.0, 1.0)
+        extremum = (beta - alpha) / np.where(beta == 0.0, 1.0, 2.0 * beta)
+        extremum = np.minimum(np.maximum(extremum, 0.0), 1.0)
         velocity = (1.0 - extremum) * (alpha + beta * extremum)
         peak_velocity = np.maximum(np.abs(alpha), np.abs(velocity))
         peak_acceleration = np.maximum(np.abs(beta - alpha), np.abs(beta + alpha)) * inverse
@@ -57,11 +57,14 @@ def peaks(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
     beta = 2.0 * alpha + start_acceleration * duration
     gamma = 30.0 * displacement * inverse - 15.0 * alpha - 2.5 * start_acceleration * duration
     e0, e1, e2 = beta - 2.0 * alpha, 2.0 * gamma - 3.0 * beta, -4.0 * gamma
-    points = np.concatenate([_unit_roots(e0, e1, e2),
-                             _unit_roots(e1 - e0, 2.0 * (e2 - e1), -3.0 * e2)], axis=1)
+    # Extrema of v (roots of E) and of a (roots of (1 - τ)E's derivative), both at once.
+    quadratics = np.empty((3, 2, alpha.size))
+    quadratics[0, 0], quadratics[1, 0], quadratics[2, 0] = e0, e1, e2
+    quadratics[0, 1], quadratics[1, 1], quadratics[2, 1] = e1 - e0, 2.0 * (e2 - e1), -3.0 * e2
+    points = _unit_roots(*quadratics.reshape(3, -1)).reshape(4, -1)
     rest = 1.0 - points
-    w = alpha[:, None] + points * (beta[:, None] + points * gamma[:, None])
-    e = e0[:, None] + points * (e1[:, None] + points * e2[:, None])
-    velocity = np.abs(rest * rest * w).max(axis=1)
-    acceleration = np.abs(rest * e).max(axis=1) * inverse
+    w = alpha + points * (beta + points * gamma)
+    e = e0 + points * (e1 + points * e2)
+    velocity = np.maximum.reduce(np.abs(rest * rest * w))
+    acceleration = np.maximum.reduce(np.abs(rest * e)) * inverse
     return np.maximum(velocity, np.abs(alpha)), np.maximum(acceleration, np.abs(e0) * inverse)

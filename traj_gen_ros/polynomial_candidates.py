@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from traj_gen_ros.polynomial import CUBIC_MATRIX, QUINTIC_MATRIX
 from traj_gen_ros.polynomial_peaks import discriminant
-from traj_gen_ros.unit_roots import quadratic_roots_in_unit_interval, roots_in_unit_interval
+from traj_gen_ros.unit_roots import column_roots, quadratic_roots_in_unit_interval
 
 
 def _padded(*rows: list[float]) -> np.ndarray:
@@ -77,44 +77,60 @@ _SHAPES = {
 }
 
 
-def _ends(shapes: np.ndarray) -> np.ndarray:
-    """``(2 orders, 4 conditions, 3 shapes)``: P at τ = 0, 1 and ∂P/∂τ at τ = 0, 1."""
+def _end_table(shapes: np.ndarray) -> np.ndarray:
+    """
+    ``(3 powers · 2 signs · 2 orders · 4 conditions, 5 inputs)``: the ends' quadratics in T.
+
+    Conditions: ``P`` at ``τ = 0`` and ``τ = 1``, ``∂P/∂τ`` at ``τ = 0`` and ``τ = 1``;
+    powers ``T², T, 1``; inputs ``(a0, v0, D, v_max, a_max)``. The limit enters ``P``
+    (conditions 0 and 1) as ``-σ v_max T`` (velocity) or ``-σ a_max T²`` (acceleration).
+    """
     slopes = np.zeros_like(shapes)
     slopes[..., :-1] = shapes[..., 1:] * np.arange(1, 6)
-    return np.stack([shapes[..., 0], shapes.sum(axis=-1), slopes[..., 0],
+    # (2 orders, 4 conditions, 3 shapes)
+    ends = np.stack([shapes[..., 0], shapes.sum(axis=-1), slopes[..., 0],
                      slopes.sum(axis=-1)], axis=1)
+    table = np.zeros((3, 2, 2, 4, 5))
+    for power in range(3):
+        table[power, :, :, :, power] = ends[None, :, :, power]
+    for order, power in enumerate(_LIMIT_POWER):
+        table[power, :, order, :2, 3 + order] = -_SIGNS[:, None]
+    return table.reshape(-1, 5)
 
 
-_ENDS = {profile: _ends(shapes) for profile, shapes in _SHAPES.items()}
+_LIMIT_POWER = (1, 0)  # the limit term multiplies T (velocity), T² (acceleration)
 _SIGNS = np.array([1.0, -1.0])  # σ
+_POWERS = np.arange(6.0)[:, None]
+_END_TABLES = {profile: _end_table(shapes) for profile, shapes in _SHAPES.items()}
+# P's coefficients at τ for both orders: rows (order, power), columns τ⁰ … τ⁵.
+_SHAPE_ROWS = {profile: shapes.reshape(6, 6) for profile, shapes in _SHAPES.items()}
 
 
 def _positive_roots(p2: np.ndarray, p1: np.ndarray, p0: np.ndarray) -> np.ndarray:
     """
-    Positive real roots of ``p2 T² + p1 T + p0`` (flat), ``(2, count)``; others not > 0.
+    Real roots of ``p2 T² + p1 T + p0`` (flat), ``(2, count)``; NaN where there is none.
 
     Stable pair: ``q = -(p1 + sgn(p1) √Δ)/2``, ``T = q/p2`` and ``p0/q`` (``p2 = 0``: the
     linear root ``-p0/p1`` is the second). A negative ``Δ`` within rounding counts as a
-    double root; complex pairs, divisions by zero and NaN give no positive root.
+    double root; complex pairs and divisions by zero give NaN or ±inf, which the caller
+    drops with the negative roots.
     """
     delta, p0, p1, p2 = discriminant(p0, p1, p2)  # rescaled where it would overflow
     half = -0.5 * (p1 + np.copysign(np.sqrt(np.maximum(delta, 0.0)), p1))
-    roots = np.empty((2, p1.size))
-    # Divisions by 0 give inf or NaN, which the caller drops (no positive finite root).
+    half[delta < -1e-12 * (p1 * p1 + np.abs(4.0 * p2 * p0))] = np.nan  # complex pair
     with np.errstate(divide='ignore', invalid='ignore'):
-        np.divide(half, p2, out=roots[0])
-        np.divide(p0, half, out=roots[1])
-    roots[:, delta < -1e-12 * (p1 * p1 + np.abs(4.0 * p2 * p0))] = np.nan
-    return roots
+        return np.array([half / p2, p0 / half])
 
 
 def _block_table(blocks: list[tuple[int, np.ndarray, list[int]]], rows: int) -> np.ndarray:
     """
-    ``(rows, 2 orders · 2 signs · 10)``: one product of monomials gives every resultant.
+    ``(10 · 2 orders · 2 signs, rows)``: one product with the monomials gives every resultant.
 
     Each block ``(order, table, odd)`` places ``table`` (monomial rows) into both sign
     columns of its order, with the rows listed in ``odd`` (odd powers of ``σ``) negated
-    for ``σ = -1``. Blocks take consecutive monomial rows.
+    for ``σ = -1``. Blocks take consecutive monomial rows. The product's rows are ordered
+    (coefficient, order, sign), so it reshapes to polynomials as columns ``(10, 4·joints)``,
+    column ``(2·order + sign)·joints + joint``.
     """
     big = np.zeros((rows, 2, 2, 10))
     row = 0
@@ -124,7 +140,7 @@ def _block_table(blocks: list[tuple[int, np.ndarray, list[int]]], rows: int) -> 
         big[row:row + table.shape[0], order, 0] = table
         big[row:row + table.shape[0], order, 1] = table * signs
         row += table.shape[0]
-    return big.reshape(rows, -1)
+    return np.ascontiguousarray(big.transpose(3, 1, 2, 0).reshape(-1, rows))
 
 
 # Monomial columns: see _monomials.
@@ -140,67 +156,69 @@ def _monomials(profile: str, displacement: np.ndarray, velocity: np.ndarray,
                acceleration: np.ndarray, max_velocity: np.ndarray,
                max_acceleration: np.ndarray) -> np.ndarray:
     """
-    ``(joints, rows)``: the products the resultants are linear in (with ``σ = +1``).
+    ``(rows, joints)``: the products the resultants are linear in (with ``σ = +1``).
 
     Degenerate inputs take their own resultant (a0 = 0 or D = 0: ``P`` loses a power of
     ``T``); where none is defined the peak does not depend on ``T`` and the row is zero.
     """
     has_d, has_a0 = displacement != 0.0, acceleration != 0.0
     if profile == 'cubic':
-        return np.stack([velocity, max_velocity], axis=1) * has_d[:, None]
+        return np.array([velocity, max_velocity]) * has_d
     v0_squared = velocity * velocity
     general = has_d & has_a0
     no_a0 = has_d & ~has_a0
     no_d = ~has_d & has_a0
     no_d_acceleration = ~has_d & (velocity != 0.0)
     a_d = acceleration * displacement
-    return np.stack([
+    return np.array([
         v0_squared * general, max_velocity * velocity * general, a_d * general,
         max_velocity * max_velocity * general,
         velocity * no_a0, max_velocity * no_a0, velocity * no_d, max_velocity * no_d,
         v0_squared * acceleration * has_d, max_acceleration * v0_squared * has_d,
         a_d * acceleration,
         max_acceleration * a_d, max_acceleration * max_acceleration * displacement,
-        acceleration * no_d_acceleration, max_acceleration * no_d_acceleration], axis=1)
+        acceleration * no_d_acceleration, max_acceleration * no_d_acceleration])
+
+
+def _interior_columns(profile: str, *moves: np.ndarray) -> np.ndarray:
+    """Resultant polynomials in τ as columns, ``(10, 4·joints)`` (see :func:`_block_table`)."""
+    return (_TABLES[profile] @ _monomials(profile, *moves)).reshape(10, -1)
 
 
 def _interior_polynomials(profile: str, *moves: np.ndarray) -> np.ndarray:
     """Resultant polynomials in τ, ``(2 orders, 2 signs, joints, 10)``."""
-    products = _monomials(profile, *moves) @ _TABLES[profile]
-    return products.reshape(-1, 2, 2, 10).transpose(1, 2, 0, 3)
+    return _interior_columns(profile, *moves).reshape(10, 2, 2, -1).transpose(1, 2, 3, 0)
 
 
 def candidates(profile: str, displacement: np.ndarray, velocity: np.ndarray,
                acceleration: np.ndarray, max_velocity: np.ndarray,
                max_acceleration: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Every duration at which a joint's peak can equal its limit, and that joint's index."""
+    """
+    Every duration at which a joint's peak can equal its limit, and that joint's index.
+
+    Each is a positive root of a quadratic in ``T``: ``P(τ, T)`` at the ends (τ = 0, 1,
+    from :data:`_END_TABLES`) or at a root τ of a resultant, all solved at once.
+    """
     joints = displacement.size
-    scales = np.stack([acceleration, velocity, displacement])  # P's T², T, 1 terms
-    limits = np.stack([max_velocity, max_acceleration])
-    limit_power = np.array([1, 0])  # the limit term multiplies T (velocity), T² (acc.)
-    # Ends: (2 signs, 2 orders, 4 conditions, 3 powers, joints); the limit enters P
-    # (conditions 0 and 1), not ∂P/∂τ.
-    ends = np.repeat((_ENDS[profile][..., None] * scales)[None], 2, axis=0)
-    for order in range(2):
-        ends[:, order, :2, limit_power[order]] -= _SIGNS[:, None, None] * limits[order]
-    end_durations = _positive_roots(ends[..., 0, :].reshape(-1), ends[..., 1, :].reshape(-1),
-                                    ends[..., 2, :].reshape(-1)).reshape(-1)
-    end_owners = np.tile(np.arange(joints), end_durations.size // joints)
+    inputs = np.array([acceleration, velocity, displacement, max_velocity, max_acceleration])
+    ends = (_END_TABLES[profile] @ inputs).reshape(3, -1)  # T², T, 1 rows
     # Interior extrema: roots in τ of the resultants, then P(τ, T) = 0 for T.
-    polynomials = _interior_polynomials(profile, displacement, velocity, acceleration,
-                                        max_velocity, max_acceleration)
+    columns = _interior_columns(profile, *inputs[[2, 1, 0, 3, 4]])
     if profile == 'cubic':  # quadratics in τ (velocity only): closed form
-        taus, rows = quadratic_roots_in_unit_interval(polynomials[0].reshape(-1, 10))
+        taus, owners = quadratic_roots_in_unit_interval(columns[:3, :2 * joints].T)
     else:
-        taus, rows = roots_in_unit_interval(polynomials.reshape(-1, 10))
-    order, sign, joint = np.unravel_index(rows, (2, 2, joints))
-    powers = taus[:, None] ** np.arange(6)
-    # Shape values at τ: (roots, 3 powers of T)
-    values = np.einsum('rk,rsk->rs', powers, _SHAPES[profile][order]) * scales[:, joint].T
-    values[np.arange(taus.size), limit_power[order]] -= \
-        np.where(sign == 0, 1.0, -1.0) * limits[order, joint]
-    interior = _positive_roots(values[:, 0], values[:, 1], values[:, 2]).reshape(-1)
-    durations = np.concatenate([end_durations, interior])
-    owners = np.concatenate([end_owners, np.tile(joint, 2)])
-    keep = np.isfinite(durations) & (durations > 0.0)
+        taus, owners = column_roots(columns)
+    kind, joint = np.divmod(owners, joints)  # kind: 2·order + sign
+    order = kind >> 1
+    both = (_SHAPE_ROWS[profile] @ taus ** _POWERS).reshape(2, 3, -1)
+    interior = np.where(order == 0, both[0], both[1]) * inputs[:3, joint]
+    # The limit term, -σ·limit, on T (velocity) or T² (acceleration).
+    limit = (1 - 2 * (kind & 1)) * inputs[3 + order, joint]
+    interior[1] -= np.where(order == 0, limit, 0.0)
+    interior[0] -= np.where(order == 0, 0.0, limit)
+    quadratics = np.concatenate([ends, interior], axis=1)
+    durations = _positive_roots(*quadratics).reshape(-1)
+    owners = np.concatenate([np.arange(ends.shape[1]) % joints, joint])
+    owners = np.concatenate([owners, owners])
+    keep = (durations > 0.0) & (durations < np.inf)
     return durations[keep], owners[keep]

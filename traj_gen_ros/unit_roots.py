@@ -13,9 +13,14 @@ a handful of vectorised steps instead:
    basis; Lane and Riesenfeld, "Bounds on a polynomial", BIT 21, 1981; Farouki and
    Rajan, CAGD 5, 1988). So a piece whose coefficients share a sign has no root, and one
    with exactly one sign change has exactly one.
-2. Pieces with more changes (close roots, near-double roots) are split into eighths once
-   (pieces of 1/256).
-3. Each piece with one root: Newton's method inside it, to machine precision.
+2. Every piece that may hold a root is split into eighths (pieces of 1/256); parts that
+   are still unresolved (close roots, such as the near-double ones of the quintic's
+   acceleration resultant near τ = (3 ± √3)/6) are split into eighths once more.
+3. Each part with one root: Newton's method inside it, from where its control polygon
+   crosses zero, to machine precision.
+
+Polynomials are stored as columns ``(size, count)`` so that every per-piece test is a
+reduction over axis 0, which numpy does in one pass over contiguous rows.
 
 A polynomial that still has an unresolved piece (close roots, a root at a piece's end, a
 double root) has all its roots computed by its companion matrix's eigenvalues instead,
@@ -34,11 +39,12 @@ import numpy as np
 from traj_gen_ros.polynomial_peaks import discriminant
 
 _PIECES = 32  # first subdivision of [0, 1]
-_SPLIT = 8  # each unresolved piece is split into this many
-_LEVELS = 1  # splits before an eigenvalue problem takes over
+_SPLIT = 8  # each piece that may hold a root is split into this many
+_LEVELS = 2  # splits before an eigenvalue problem takes over
 _MARGIN = 1e-13  # normalised Bernstein coefficients this close to 0 count as 0
 _IMAGINARY_SLACK = 1e-6  # eigenvalues this close to the real axis count as real
 _NEWTON_STEPS = 12  # unguarded steps from the secant point at most, then a check
+_ORDERS = np.arange(16.0)  # derivative factors
 
 
 @functools.cache
@@ -75,6 +81,43 @@ def _split(size: int) -> np.ndarray:
     return np.linalg.inv(_bernstein(size)) @ _pieces(size, _SPLIT)
 
 
+@functools.cache
+def _by_columns(size: int, kind: str) -> np.ndarray:
+    """
+    :func:`_pieces` (``kind`` "pieces") or :func:`_split` for polynomials stored as columns.
+
+    Row ``k·parts + part`` gives coefficient ``k`` on ``part``, so ``matrix @ columns``
+    reshaped to ``(size, parts·count)`` holds one piece per column (``part·count + row``)
+    and every test of a piece is a reduction over axis 0 (fast in numpy, unlike axis 1).
+    """
+    matrix = _pieces(size, _PIECES) if kind == 'pieces' else _split(size)
+    parts = matrix.shape[1] // size
+    return np.ascontiguousarray(
+        matrix.reshape(size, parts, size).transpose(2, 1, 0).reshape(size * parts, size))
+
+
+def _may_hold_roots(coefficients: np.ndarray) -> np.ndarray:
+    """Pieces (columns) whose Bernstein coefficients are not all beyond ``±_MARGIN``, one side."""
+    return ((np.minimum.reduce(coefficients) <= _MARGIN) &
+            (np.maximum.reduce(coefficients) >= -_MARGIN)).nonzero()[0]
+
+
+def _classify(coefficients: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Pieces (columns of Bernstein coefficients) with exactly one root, and unresolved ones.
+
+    A piece whose coefficients all lie beyond ``±_MARGIN`` on one side has no root; one
+    with no coefficient within the margin and one sign change has exactly one; any other
+    piece (more changes, or a coefficient within rounding of 0) is unresolved.
+    """
+    maybe = _may_hold_roots(coefficients)
+    near = coefficients[:, maybe]
+    positive = near > _MARGIN
+    clear = np.logical_and.reduce(positive | (near < -_MARGIN))
+    single = clear & (np.add.reduce(positive[1:] != positive[:-1]) == 1)
+    return maybe[single], maybe[~single]
+
+
 def roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     Real roots in ``[0, 1]`` of ascending polynomials ``(count, size)``, ``size ≤ 10``.
@@ -82,49 +125,45 @@ def roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndar
     Returns the roots and the row each belongs to. Rows that are identically zero have
     no isolated roots and give none.
     """
-    size = polynomials.shape[1]
-    scale = np.abs(polynomials).max(axis=1)
-    nonzero = np.flatnonzero(scale)
-    normalised = polynomials[nonzero] / scale[nonzero, None]
-    coefficients = (normalised @ _pieces(size, _PIECES)).reshape(-1, size)
-    owners = np.repeat(np.arange(nonzero.size), _PIECES)
-    starts = np.tile(np.arange(_PIECES) / _PIECES, nonzero.size)
-    width = 1.0 / _PIECES
-    found: list[tuple] = []
-    for level in range(_LEVELS + 1):
-        # Signs with near-zero coefficients as 0; sums by matrix products (row reductions
-        # of short rows are slow in numpy).
-        signs = np.sign(coefficients)
-        signs[np.abs(coefficients) <= _MARGIN] = 0.0
-        clear = np.abs(signs) @ np.ones(size) == size
-        changes = (size - 1 - (signs[:, 1:] * signs[:, :-1]) @ np.ones(size - 1)) / 2
-        single = clear & (changes == 1)
-        found.append((owners[single], starts[single], width, coefficients[single]))
-        unresolved = ~clear | (changes > 1)
-        if not unresolved.any():
-            hard = np.zeros(0, dtype=np.intp)
+    return column_roots(polynomials.T)
+
+
+def column_roots(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`roots_in_unit_interval` of polynomials stored as columns, ``(size, count)``."""
+    size = polynomials.shape[0]
+    scale = np.maximum.reduce(np.abs(polynomials))
+    nonzero = scale.nonzero()[0]
+    normalised = polynomials[:, nonzero] / scale[nonzero]
+    count = nonzero.size
+    coefficients = (_by_columns(size, 'pieces') @ normalised).reshape(size, -1)
+    # Every piece that may hold a root is split into eighths (one product) and classified;
+    # unresolved parts are split once more. Pending parts: owner row, start, coefficients.
+    pending = _may_hold_roots(coefficients)
+    owners, starts = pending % count, (pending // count) / _PIECES
+    coefficients = coefficients[:, pending]
+    found: list[tuple] = []  # parts with one root: (owners, starts, widths, coefficients)
+    for level in range(1, _LEVELS + 1):
+        width = 1.0 / (_PIECES * _SPLIT ** level)
+        parts = (_by_columns(size, 'split') @ coefficients).reshape(size, -1)
+        single, unresolved = _classify(parts)
+        parent = single % owners.size  # part p of pending column c is column p·size + c
+        found.append((owners[parent], starts[parent] + (single // owners.size) * width,
+                      np.full(single.size, width), parts[:, single]))
+        parent = unresolved % owners.size
+        owners, starts = owners[parent], starts[parent] + (unresolved // owners.size) * width
+        coefficients = parts[:, unresolved]
+        if not owners.size:
             break
-        if level == _LEVELS:
-            hard = np.flatnonzero(np.bincount(owners[unresolved], minlength=nonzero.size))
-            break
-        coefficients = (coefficients[unresolved] @ _split(size)).reshape(-1, size)
-        owners = np.repeat(owners[unresolved], _SPLIT)
-        width /= _SPLIT
-        starts = (starts[unresolved][:, None] + width * np.arange(_SPLIT)).reshape(-1)
-    rows = np.concatenate([part[0] for part in found])
-    is_hard = np.zeros(nonzero.size, dtype=bool)
-    is_hard[hard] = True
-    easy = ~is_hard[rows]
-    roots = _newton(normalised[rows[easy]],
-                    np.concatenate([part[1] for part in found])[easy],
-                    np.concatenate([np.full(part[0].size, part[2]) for part in found])[easy],
-                    np.concatenate([part[3] for part in found])[easy])
-    rows = rows[easy]
-    if hard.size:
-        hard_roots, hard_rows = _eigenvalue_roots(normalised[hard])
-        roots = np.concatenate([roots, hard_roots])
-        rows = np.concatenate([rows, hard[hard_rows]])
-    return roots, nonzero[rows]
+    roots_of, at, widths, bernstein = (np.concatenate(part, axis=-1)
+                                       for part in zip(*found, strict=True))
+    roots = _newton(normalised[:, roots_of], at, widths, bernstein)
+    if not owners.size:
+        return roots, nonzero[roots_of]
+    hard = np.bincount(owners, minlength=count).nonzero()[0]
+    easy = np.bincount(hard, minlength=count)[roots_of] == 0
+    hard_roots, hard_rows = _eigenvalue_roots(normalised[:, hard].T)
+    return (np.concatenate([roots[easy], hard_roots]),
+            nonzero[np.concatenate([roots_of[easy], hard[hard_rows]])])
 
 
 def quadratic_roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -151,45 +190,47 @@ def quadratic_roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarra
 def _newton(coefficients: np.ndarray, starts: np.ndarray, widths: np.ndarray,
             bernstein: np.ndarray) -> np.ndarray:
     """
-    Return the one root of polynomial row ``k`` in ``[starts[k], starts[k] + widths[k]]``.
+    Return the one root of polynomial column ``k`` in ``[starts[k], starts[k] + widths[k]]``.
 
-    ``bernstein`` holds each piece's Bernstein coefficients. The piece is split once more
-    and the part whose end values (first Bernstein coefficients) change sign taken; then
-    Newton's method from the secant point there, a few steps. Rows that have not
-    converged inside their part by then (rare) continue safeguarded: a step leaving the
-    bracket bisects it, and the bracket shrinks to the iterate.
+    ``bernstein`` holds each part's Bernstein coefficients (columns), with one sign change
+    (the first and last are the values at the part's ends). Newton's method from where the
+    control polygon crosses zero: three steps for all (two reach machine precision from
+    such a start for a simple root), more for those whose last step was not yet below
+    1e-12. Columns that have not converged inside their
+    part by then (rare) continue safeguarded: a step leaving the bracket bisects it.
     """
-    if not starts.size:
-        return np.zeros(0)
-    size = coefficients.shape[1]
-    powers = np.arange(size)
-    slopes = coefficients[:, 1:] * powers[1:]
-    # A better bracket first: the part of the piece (one of _SPLIT) where the sign changes,
-    # from the values at the parts' ends (their first Bernstein coefficients).
-    parts = (bernstein @ _split(size)).reshape(-1, _SPLIT, size)
-    ends = np.concatenate([parts[:, :, 0], bernstein[:, -1:]], axis=1)
-    part = np.argmax(ends[:, :-1] * ends[:, 1:] <= 0.0, axis=1)
-    widths = widths / _SPLIT
-    starts = starts + part * widths
-    chosen = np.arange(part.size)
-    at_low, at_high = ends[chosen, part], ends[chosen, part + 1]
-    span = at_low - at_high  # not 0: the values differ in sign (or one is 0)
-    point = starts + widths * at_low / np.where(span == 0.0, 1.0, span)
-    # Value and slope by one product: rows (coefficients, slopes padded with a 0).
-    pair = np.zeros((point.size, 2, size))
-    pair[:, 0] = coefficients
-    pair[:, 1, :-1] = slopes
-    for index in range(_NEWTON_STEPS):
-        both = pair @ (point[:, None] ** powers)[:, :, None]
-        step = both[:, 0, 0] / both[:, 1, 0]
-        point = point - step
-        if index % 2 and np.abs(step).max() <= 1e-12:
+    size = coefficients.shape[0]
+    # Start where the control polygon (the Bernstein coefficients at k/(size - 1)) crosses
+    # zero: its one sign change, between coefficients k and k + 1.
+    positive = bernstein > 0.0
+    change = np.argmax(positive[1:] != positive[:-1], axis=0)
+    columns = np.arange(change.size)
+    before, after = bernstein[change, columns], bernstein[change + 1, columns]
+    point = starts + widths * (change + before / (before - after)) / (size - 1)
+    # Value and slope by one product: (2, size, count), the slopes padded with a 0.
+    pair = np.zeros((2, size, point.size))
+    pair[0] = coefficients
+    pair[1, :-1] = coefficients[1:] * _ORDERS[1:size, None]
+    powers = _ORDERS[:size, None]
+    for _ in range(3):
+        both = np.einsum('jkn,kn->jn', pair, point ** powers)
+        step = both[0] / both[1]
+        point -= step
+    active = (np.abs(step) > 1e-12).nonzero()[0]
+    for _ in range(_NEWTON_STEPS - 3 if active.size else 0):
+        both = np.einsum('jkn,kn->jn', pair[:, :, active], point[active] ** powers)
+        step = both[0] / both[1]
+        point[active] -= step
+        active = active[np.abs(step) > 1e-12]
+        if not active.size:
             break
-    settled = (np.abs(step) <= 1e-12) & (point >= starts) & (point <= starts + widths)
+    settled = (point >= starts) & (point <= starts + widths)
+    settled[active] = False
     if not settled.all():
-        again = np.flatnonzero(~settled)
-        point[again] = _safeguarded(coefficients[again], slopes[again], starts[again],
-                                    starts[again] + widths[again], at_low[again] < 0.0)
+        again = (~settled).nonzero()[0]
+        point[again] = _safeguarded(coefficients[:, again].T, pair[1, :-1, again],
+                                    starts[again], starts[again] + widths[again],
+                                    bernstein[0, again] < 0.0)
     return point
 
 
@@ -247,6 +288,6 @@ def _eigenvalue_roots(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 # Build the degree-9 tables (~1 ms) and make the first eigenvalue call at import rather
 # than in the node's first plan from a moving state.
-_pieces(10, _PIECES)
-_split(10)
+_by_columns(10, 'pieces')
+_by_columns(10, 'split')
 np.linalg.eigvals(np.eye(2)[None])
