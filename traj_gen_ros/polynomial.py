@@ -84,6 +84,25 @@ def quintic(
                      np.array([duration]))
 
 
+def to_rest(profile: str, start: np.ndarray, goal: np.ndarray, duration: float,
+            start_velocity: np.ndarray, start_acceleration: np.ndarray) -> Trajectory:
+    """
+    :func:`cubic` (from ``v0``) or :func:`quintic` (from ``v0``, ``a0``) to rest at ``goal``.
+
+    For inputs already validated (flat per-joint arrays, a valid duration), as the timing
+    of a move from a moving state has them: the same plan without checking them again.
+    """
+    zeros = np.zeros_like(start)
+    if profile == 'cubic':
+        matrix, exponents = CUBIC_MATRIX, _CUBIC_EXPONENTS
+        conditions = np.array([zeros, start_velocity, goal - start, zeros])
+    else:
+        matrix, exponents = QUINTIC_MATRIX, _QUINTIC_EXPONENTS
+        conditions = np.array([zeros, start_velocity, start_acceleration, goal - start,
+                               zeros, zeros])
+    return _segments(matrix, exponents, start[None], conditions[None], np.array([duration]))
+
+
 def cubic_via(
     points: ArrayLike,
     durations: ArrayLike,

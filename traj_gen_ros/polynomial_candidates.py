@@ -102,8 +102,24 @@ _LIMIT_POWER = (1, 0)  # the limit term multiplies T (velocity), T² (accelerati
 _SIGNS = np.array([1.0, -1.0])  # σ
 _POWERS = np.arange(6.0)[:, None]
 _END_TABLES = {profile: _end_table(shapes) for profile, shapes in _SHAPES.items()}
-# P's coefficients at τ for both orders: rows (order, power), columns τ⁰ … τ⁵.
-_SHAPE_ROWS = {profile: shapes.reshape(6, 6) for profile, shapes in _SHAPES.items()}
+
+
+def _value_table(shapes: np.ndarray) -> np.ndarray:
+    """
+    ``(4 kinds · 3 powers · 5 inputs, 6)``: ``P(τ, T)``'s coefficients as polynomials in τ.
+
+    Kind ``2·order + sign``; powers ``T², T, 1``; inputs ``(a0, v0, D, v_max, a_max)``:
+    the coefficient of ``T^(2-p)`` is ``Σ_i input_i · table[kind, p, i](τ)``.
+    """
+    table = np.zeros((2, 2, 3, 5, 6))
+    for power in range(3):
+        table[:, :, power, power] = shapes[:, None, power]
+    for order, power in enumerate(_LIMIT_POWER):
+        table[order, :, power, 3 + order, 0] = -_SIGNS
+    return table.reshape(-1, 6)
+
+
+_VALUE_TABLES = {profile: _value_table(shapes) for profile, shapes in _SHAPES.items()}
 
 
 def _positive_roots(p2: np.ndarray, p1: np.ndarray, p0: np.ndarray) -> np.ndarray:
@@ -165,19 +181,28 @@ def _monomials(profile: str, displacement: np.ndarray, velocity: np.ndarray,
     if profile == 'cubic':
         return np.array([velocity, max_velocity]) * has_d
     v0_squared = velocity * velocity
-    general = has_d & has_a0
-    no_a0 = has_d & ~has_a0
-    no_d = ~has_d & has_a0
-    no_d_acceleration = ~has_d & (velocity != 0.0)
     a_d = acceleration * displacement
-    return np.array([
-        v0_squared * general, max_velocity * velocity * general, a_d * general,
-        max_velocity * max_velocity * general,
-        velocity * no_a0, max_velocity * no_a0, velocity * no_d, max_velocity * no_d,
-        v0_squared * acceleration * has_d, max_acceleration * v0_squared * has_d,
-        a_d * acceleration,
+    products = np.array([
+        v0_squared, max_velocity * velocity, a_d, max_velocity * max_velocity,  # general
+        velocity, max_velocity,  # a0 = 0
+        velocity, max_velocity,  # D = 0
+        v0_squared * acceleration, max_acceleration * v0_squared, a_d * acceleration,
         max_acceleration * a_d, max_acceleration * max_acceleration * displacement,
-        acceleration * no_d_acceleration, max_acceleration * no_d_acceleration])
+        acceleration, max_acceleration])  # D = 0 (acceleration)
+    if has_d.all() and has_a0.all():  # no degenerate joint: the general rows only
+        return products * _GENERAL_ROWS
+    general = has_d & has_a0
+    no_d = ~has_d & has_a0
+    no_a0 = has_d & ~has_a0
+    no_d_acceleration = ~has_d & (velocity != 0.0)
+    every = np.ones_like(has_d)
+    return products * np.array([general, general, general, general, no_a0, no_a0, no_d, no_d,
+                                has_d, has_d, every, every, every, no_d_acceleration,
+                                no_d_acceleration])
+
+
+# Which of the 15 quintic monomial rows apply when no joint is degenerate.
+_GENERAL_ROWS = np.array([1.0] * 4 + [0.0] * 4 + [1.0] * 5 + [0.0] * 2)[:, None]
 
 
 def _interior_columns(profile: str, *moves: np.ndarray) -> np.ndarray:
@@ -191,10 +216,10 @@ def _interior_polynomials(profile: str, *moves: np.ndarray) -> np.ndarray:
 
 
 def candidates(profile: str, displacement: np.ndarray, velocity: np.ndarray,
-               acceleration: np.ndarray, max_velocity: np.ndarray,
-               max_acceleration: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+               acceleration: np.ndarray, max_velocity: np.ndarray, max_acceleration: np.ndarray,
+               shortest: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """
-    Every duration at which a joint's peak can equal its limit, and that joint's index.
+    Every duration above ``shortest`` where a joint's peak can equal its limit, and its joint.
 
     Each is a positive root of a quadratic in ``T``: ``P(τ, T)`` at the ends (τ = 0, 1,
     from :data:`_END_TABLES`) or at a root τ of a resultant, all solved at once.
@@ -209,16 +234,12 @@ def candidates(profile: str, displacement: np.ndarray, velocity: np.ndarray,
     else:
         taus, owners = column_roots(columns)
     kind, joint = np.divmod(owners, joints)  # kind: 2·order + sign
-    order = kind >> 1
-    both = (_SHAPE_ROWS[profile] @ taus ** _POWERS).reshape(2, 3, -1)
-    interior = np.where(order == 0, both[0], both[1]) * inputs[:3, joint]
-    # The limit term, -σ·limit, on T (velocity) or T² (acceleration).
-    limit = (1 - 2 * (kind & 1)) * inputs[3 + order, joint]
-    interior[1] -= np.where(order == 0, limit, 0.0)
-    interior[0] -= np.where(order == 0, 0.0, limit)
+    tables = (_VALUE_TABLES[profile] @ taus ** _POWERS).reshape(4, 15, -1)
+    at_root = tables[kind, :, np.arange(kind.size)].reshape(-1, 3, 5)  # (roots, 3, 5)
+    interior = np.einsum('rpi,ir->pr', at_root, inputs[:, joint])
     quadratics = np.concatenate([ends, interior], axis=1)
     durations = _positive_roots(*quadratics).reshape(-1)
     owners = np.concatenate([np.arange(ends.shape[1]) % joints, joint])
     owners = np.concatenate([owners, owners])
-    keep = (durations > 0.0) & (durations < np.inf)
+    keep = (durations > shortest) & (durations < np.inf)
     return durations[keep], owners[keep]

@@ -26,6 +26,7 @@ from traj_gen_ros.polynomial_candidates import candidates
 #: Shortest polynomial plan (s): shorter ones' coefficients ~ D/T⁵ overflow.
 SHORTEST_POLYNOMIAL = 1e-9
 _FIRST_BATCH = 16  # joints analysed exactly at first (the largest lower bounds)
+_FIRST_POINTS = 16  # candidates above the lower bound checked first
 # Relative nudges tried when rounding leaves a boundary candidate just outside its run.
 _NUDGES = 1e-15 * 3.0 ** np.arange(25)  # 1e-15 … 2.8e-4
 
@@ -37,12 +38,13 @@ def _feasible(profile: str, moves: tuple, who: np.ndarray, durations: np.ndarray
     Within half of ``LIMIT_TOLERANCE``: the plan's own peaks, computed again from its
     coefficients in real time (the node checks every plan), round apart from these.
     """
-    displacement, velocity, acceleration, max_velocity, max_acceleration = moves
-    peak_velocity, peak_acceleration = peaks(profile, displacement[who], velocity[who],
-                                             acceleration[who], durations)
+    displacement, velocity, acceleration, max_velocity, max_acceleration = \
+        np.array(moves)[:, who]
+    peak_velocity, peak_acceleration = peaks(profile, displacement, velocity, acceleration,
+                                             durations)
     slack = 1.0 + 0.5 * LIMIT_TOLERANCE
-    return (peak_velocity <= max_velocity[who] * slack) & \
-        (peak_acceleration <= max_acceleration[who] * slack)
+    return (peak_velocity <= max_velocity * slack) & \
+        (peak_acceleration <= max_acceleration * slack)
 
 
 def feasible_runs(profile: str, moves: tuple) -> np.ndarray:
@@ -53,10 +55,9 @@ def feasible_runs(profile: str, moves: tuple) -> np.ndarray:
     that never ends. A joint with no run can achieve no duration.
     """
     joints = moves[0].size
-    durations, owners = candidates(profile, *moves)
-    keep = durations > SHORTEST_POLYNOMIAL
-    durations = np.concatenate([durations[keep], np.full(joints, SHORTEST_POLYNOMIAL)])
-    owners = np.concatenate([owners[keep], np.arange(joints)])
+    durations, owners = candidates(profile, *moves, shortest=SHORTEST_POLYNOMIAL)
+    durations = np.concatenate([durations, np.full(joints, SHORTEST_POLYNOMIAL)])
+    owners = np.concatenate([owners, np.arange(joints)])
     order = np.lexsort((durations, owners))
     durations, owners = durations[order], owners[order]
     fresh = np.ones(durations.size, dtype=bool)
@@ -78,11 +79,11 @@ def feasible_runs(profile: str, moves: tuple) -> np.ndarray:
     starts = at_point & ~before
     ends = at_point & ~after
     end_points = durations[ends]
-    # A feasible last gap runs on: its run never ends.
-    run_ends = np.full(np.count_nonzero(starts), np.inf)
-    closed = np.cumsum(starts)[ends] - 1
-    run_ends[closed] = end_points
-    return np.stack([durations[starts], run_ends, owners[starts]])
+    # A feasible last gap runs on: its run never ends (inf).
+    runs = np.full((3, np.count_nonzero(starts)), np.inf)
+    runs[0], runs[2] = durations[starts], owners[starts]
+    runs[1, np.cumsum(starts)[ends] - 1] = end_points
+    return runs
 
 
 def _polish(profile: str, moves: tuple, durations: np.ndarray, owners: np.ndarray,
@@ -156,19 +157,24 @@ def minimum_duration(profile: str, displacement: np.ndarray, start_velocity: np.
     Return the smallest common duration: ``(duration, None)``, or ``(None, joint)``.
 
     ``joint`` is one that can achieve no duration at all (``None`` if every joint can, but
-    never together). Only the joints that can bind are analysed exactly: the
-    second-order time-optimal duration (:func:`second_order.minimum_times`, bang-bang with
-    the same limits) is a lower bound for any profile, so joints are analysed in the order
-    of that bound until the next bound is below the duration found; every other joint is
+    never together). The second-order time-optimal duration
+    (:func:`second_order.minimum_times`, bang-bang with the same limits) is a lower bound
+    for any profile, so only durations above the largest bound are looked at. Up to
+    ``_FIRST_BATCH`` joints, every joint is checked at every candidate of every joint
+    (:func:`_smallest_common_duration`). Beyond that, joints are analysed in the order of
+    their bound until the next bound is below the duration found; every other joint is
     then checked at that duration, and one that fails is analysed too.
     """
     moves = (displacement, start_velocity, start_acceleration, max_velocity,
              max_acceleration)
     joints = displacement.size
-    if joints <= _FIRST_BATCH:
-        return _common_duration(profile, moves, np.arange(joints))
     bounds = second_order.minimum_times(displacement, start_velocity, max_velocity,
                                         max_acceleration)
+    if joints <= _FIRST_BATCH:
+        duration = _smallest_common_duration(profile, moves, float(bounds.max()))
+        # None: the per-joint analysis tells which joint, if any, can never move.
+        return (duration, None) if duration is not None else \
+            _common_duration(profile, moves, None)
     order = np.argsort(-bounds)
     analysed = order[:_FIRST_BATCH]
     while True:
@@ -186,12 +192,79 @@ def minimum_duration(profile: str, displacement: np.ndarray, start_velocity: np.
         analysed = np.concatenate([analysed, binding])
 
 
+def _smallest_common_duration(profile: str, moves: tuple, bound: float) -> float | None:
+    """
+    Return the smallest duration from ``bound`` on that suits every joint, or ``None``.
+
+    Every joint's feasibility is constant between consecutive candidates of all joints, so
+    the answer is the first candidate where every joint is feasible, at the candidate or
+    (rounding can leave a run's exact start a hair outside) in the gap after it; there
+    the start is moved onto the run (:func:`_onto_common_run`). Each joint is checked at
+    every candidate and gap: ``joints × 2 × candidates`` exact peaks in one call.
+    """
+    joints = moves[0].size
+    # Plans may use half of LIMIT_TOLERANCE: a feasible start can lie that far below.
+    bound = max(bound * (1.0 - 1e-9), SHORTEST_POLYNOMIAL)
+    durations, _ = candidates(profile, *moves, shortest=bound)
+    points = np.sort(np.concatenate([durations, [bound]]))
+    gaps = np.empty_like(points)
+    gaps[:-1] = 0.5 * (points[:-1] + points[1:])
+    gaps[-1] = 2.0 * points[-1]
+    # The answer is usually among the first few points: those first, then the rest.
+    for chunk in (slice(0, _FIRST_POINTS), slice(_FIRST_POINTS, None)):
+        times = np.concatenate([points[chunk], gaps[chunk]])
+        if not times.size:
+            break
+        feasible = _feasible(profile, moves, np.arange(joints).repeat(times.size),
+                             np.repeat(times[None], joints, axis=0).reshape(-1))
+        together = np.logical_and.reduce(feasible.reshape(joints, -1))
+        count = times.size // 2
+        either = together[:count] | together[count:]
+        if either.any():
+            first = int(np.argmax(either))
+            if together[first]:
+                return float(points[chunk][first])
+            return _onto_common_run(profile, moves, float(points[chunk][first]),
+                                    float(gaps[chunk][first]))
+    return None
+
+
+def _onto_common_run(profile: str, moves: tuple, outside: float, inside: float) -> float:
+    """
+    Return the smallest duration in ``(outside, inside]`` where every joint is feasible.
+
+    ``outside`` is a run's start that rounding left just outside it and ``inside`` a
+    duration in the run: the smallest relative nudge in :data:`_NUDGES` that suits every
+    joint, or where that is coarse (above 1e-9) or none is, 48 halvings of the bracket.
+    """
+    joints = moves[0].size
+    tries = outside * (1.0 + _NUDGES)
+    tries = tries[tries < inside]
+    fits = np.logical_and.reduce(_feasible(
+        profile, moves, np.arange(joints).repeat(tries.size),
+        np.repeat(tries[None], joints, axis=0).reshape(-1)).reshape(joints, -1))
+    if fits.any() and _NUDGES[np.argmax(fits)] <= 1e-9:
+        return float(tries[np.argmax(fits)])
+    low = float(tries[np.argmax(fits) - 1]) if fits.any() and fits.argmax() > 0 else outside
+    high = float(tries[np.argmax(fits)]) if fits.any() else inside
+    everyone = np.arange(joints)
+    for _ in range(48):
+        middle = 0.5 * (low + high)
+        if _feasible(profile, moves, everyone, np.full(joints, middle)).all():
+            high = middle
+        else:
+            low = middle
+    return high
+
+
 def _common_duration(profile: str, moves: tuple,
-                     joints: np.ndarray) -> tuple[float | None, int | None]:
-    """:func:`minimum_duration` over the given joints, all analysed exactly."""
-    subset = tuple(values[joints] for values in moves)
+                     joints: np.ndarray | None) -> tuple[float | None, int | None]:
+    """:func:`minimum_duration` over the given joints (``None``: all), analysed exactly."""
+    subset = moves if joints is None else tuple(values[joints] for values in moves)
+    count = subset[0].size
     runs = feasible_runs(profile, subset)
-    counts = np.bincount(runs[2].astype(np.intp), minlength=joints.size)
+    counts = np.bincount(runs[2].astype(np.intp), minlength=count)
     if not counts.all():
-        return None, int(joints[np.argmin(counts)])
-    return synchronised_duration(runs, joints.size), None
+        hopeless = int(np.argmin(counts))
+        return None, hopeless if joints is None else int(joints[hopeless])
+    return synchronised_duration(runs, count), None

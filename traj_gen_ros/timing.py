@@ -24,7 +24,7 @@ import numpy as np
 from traj_gen_ros import second_order, validation
 from traj_gen_ros.blends import lspb_via, three_pieces
 from traj_gen_ros.limits import JointError, within_limits
-from traj_gen_ros.polynomial import cubic, cubic_via, quintic, quintic_via
+from traj_gen_ros.polynomial import cubic, cubic_via, quintic, quintic_via, to_rest
 from traj_gen_ros.polynomial_timing import minimum_duration, SHORTEST_POLYNOMIAL
 from traj_gen_ros.scurve_move import scurve_min_time
 from traj_gen_ros.scurve_path import scurve_via_durations
@@ -335,9 +335,7 @@ def _moving_min_time(
     if duration is None:
         raise ValueError(f'no {profile} duration suits every joint at once (their feasible '
                          'durations do not overlap); stop first or choose another profile')
-    planner = cubic if profile == 'cubic' else quintic
-    extra = {'a0': start_acceleration} if profile == 'quintic' else {}
-    return planner(start, goal, duration, v0=start_velocity, **extra)
+    return to_rest(profile, start, goal, duration, start_velocity, start_acceleration)
 
 
 def _moving_lspb(

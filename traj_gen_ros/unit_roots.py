@@ -43,7 +43,10 @@ _SPLIT = 8  # each piece that may hold a root is split into this many
 _LEVELS = 2  # splits before an eigenvalue problem takes over
 _MARGIN = 1e-13  # normalised Bernstein coefficients this close to 0 count as 0
 _IMAGINARY_SLACK = 1e-6  # eigenvalues this close to the real axis count as real
-_NEWTON_STEPS = 12  # unguarded steps from the secant point at most, then a check
+_NEWTON_STEPS = 12  # unguarded steps from the start at most, then a safeguarded search
+# Newton's method converges quadratically: after a step of size s the error is about
+# C·s² (C = |p''/2p'|, ~1-100 here), so a last step below 1e-8 leaves ~1e-16·C.
+_LAST_STEP = 1e-8
 _ORDERS = np.arange(16.0)  # derivative factors
 
 
@@ -194,9 +197,8 @@ def _newton(coefficients: np.ndarray, starts: np.ndarray, widths: np.ndarray,
 
     ``bernstein`` holds each part's Bernstein coefficients (columns), with one sign change
     (the first and last are the values at the part's ends). Newton's method from where the
-    control polygon crosses zero: three steps for all (two reach machine precision from
-    such a start for a simple root), more for those whose last step was not yet below
-    1e-12. Columns that have not converged inside their
+    control polygon crosses zero: two steps for all, more for those whose last step was
+    not yet below ``_LAST_STEP``. Columns that have not converged inside their
     part by then (rare) continue safeguarded: a step leaving the bracket bisects it.
     """
     size = coefficients.shape[0]
@@ -212,16 +214,16 @@ def _newton(coefficients: np.ndarray, starts: np.ndarray, widths: np.ndarray,
     pair[0] = coefficients
     pair[1, :-1] = coefficients[1:] * _ORDERS[1:size, None]
     powers = _ORDERS[:size, None]
-    for _ in range(3):
+    for _ in range(2):
         both = np.einsum('jkn,kn->jn', pair, point ** powers)
         step = both[0] / both[1]
         point -= step
-    active = (np.abs(step) > 1e-12).nonzero()[0]
-    for _ in range(_NEWTON_STEPS - 3 if active.size else 0):
+    active = (np.abs(step) > _LAST_STEP).nonzero()[0]
+    for _ in range(_NEWTON_STEPS - 2 if active.size else 0):
         both = np.einsum('jkn,kn->jn', pair[:, :, active], point[active] ** powers)
         step = both[0] / both[1]
         point[active] -= step
-        active = active[np.abs(step) > 1e-12]
+        active = active[np.abs(step) > _LAST_STEP]
         if not active.size:
             break
     settled = (point >= starts) & (point <= starts + widths)
