@@ -54,17 +54,18 @@ def peaks(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
         peak_velocity = np.maximum(np.abs(alpha), np.abs(velocity))
         peak_acceleration = np.maximum(np.abs(beta - alpha), np.abs(beta + alpha)) * inverse
         return peak_velocity, peak_acceleration
-    beta = 2.0 * alpha + start_acceleration * duration
-    gamma = 30.0 * displacement * inverse - 15.0 * alpha - 2.5 * start_acceleration * duration
-    e0, e1, e2 = beta - 2.0 * alpha, 2.0 * gamma - 3.0 * beta, -4.0 * gamma
+    e0 = start_acceleration * duration  # = β - 2α
+    beta = 2.0 * alpha + e0
+    gamma = 30.0 * displacement * inverse - 15.0 * alpha - 2.5 * e0
+    e1, e2 = 2.0 * gamma - 3.0 * beta, -4.0 * gamma
     # Extrema of v (roots of E) and of a (roots of (1 - τ)E's derivative), both at once.
     quadratics = np.empty((3, 2, alpha.size))
     quadratics[0, 0], quadratics[1, 0], quadratics[2, 0] = e0, e1, e2
     quadratics[0, 1], quadratics[1, 1], quadratics[2, 1] = e1 - e0, 2.0 * (e2 - e1), -3.0 * e2
-    points = _unit_roots(*quadratics.reshape(3, -1)).reshape(4, -1)
+    points = np.zeros((5, alpha.size))  # the last row: τ = 0, where v = α and a = e0/T
+    points[:4] = _unit_roots(*quadratics.reshape(3, -1)).reshape(4, -1)
     rest = 1.0 - points
     w = alpha + points * (beta + points * gamma)
     e = e0 + points * (e1 + points * e2)
-    velocity = np.maximum.reduce(np.abs(rest * rest * w))
-    acceleration = np.maximum.reduce(np.abs(rest * e)) * inverse
-    return np.maximum(velocity, np.abs(alpha)), np.maximum(acceleration, np.abs(e0) * inverse)
+    return (np.maximum.reduce(np.abs(rest * rest * w)),
+            np.maximum.reduce(np.abs(rest * e)) * inverse)

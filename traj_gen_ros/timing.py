@@ -324,9 +324,9 @@ def _moving_min_time(
     # Start terms far below their limits (1e-12) only blur the candidate polynomials' degree.
     duration, hopeless = minimum_duration(
         profile, goal - start,
-        np.where(np.abs(start_velocity) < 1e-12 * max_velocity, 0.0, start_velocity),
-        np.where(np.abs(start_acceleration) < 1e-12 * max_acceleration, 0.0,
-                 start_acceleration), max_velocity, max_acceleration)
+        start_velocity * (np.abs(start_velocity) >= 1e-12 * max_velocity),
+        start_acceleration * (np.abs(start_acceleration) >= 1e-12 * max_acceleration),
+        max_velocity, max_acceleration)
     if hopeless is not None:
         raise JointError(
             f'{{joint}}: no {profile} from velocity {start_velocity[hopeless]:g} and '
