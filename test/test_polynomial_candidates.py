@@ -14,7 +14,13 @@ import pytest
 from traj_gen_ros import cubic, quintic
 from traj_gen_ros.move_peaks import peaks
 from traj_gen_ros.polynomial_candidates import _interior_polynomials, candidates
-from traj_gen_ros.polynomial_timing import synchronised_duration
+from traj_gen_ros.polynomial_timing import (
+    _common_duration,
+    _onto_common_run,
+    _smallest_common_duration,
+    synchronised_duration,
+)
+from traj_gen_ros.second_order import minimum_times
 
 # Position in normalised time τ, per term (ascending in τ): Craig's quintic (eq. 7.3-7.5)
 # and cubic (eq. 7.9) to rest, as D·m_D + v0 T·m_v + a0 T²·m_a.
@@ -159,6 +165,45 @@ def test_feasibility_changes_only_at_candidates(profile):
 ])
 def test_synchronised_duration_is_the_smallest_common_one(runs, expected):
     assert synchronised_duration(np.array(runs), 2) == expected
+
+
+def random_moves(rng, profile, joints):
+    """Return moves ``(D, v0, a0, v_max, a_max)`` from random moving states, some still."""
+    limits = 10.0 ** rng.uniform(-0.5, 0.5, (2, joints))
+    start = rng.uniform(-1.0, 1.0, (2, joints)) * limits * rng.choice([0.0, 1.0], (2, joints))
+    if profile == 'cubic':
+        start[1] = 0.0
+    displacement = rng.uniform(-3.0, 3.0, joints) * rng.choice([0.0, 1.0], joints, p=[0.1, 0.9])
+    return displacement, start[0], start[1], limits[0], limits[1]
+
+
+@pytest.mark.parametrize('profile', ['cubic', 'quintic'])
+def test_all_joints_check_agrees_with_the_runs_of_each_joint(profile):
+    """Two syntheses of the same candidates: every joint at every candidate, and runs."""
+    rng = np.random.default_rng(21)
+    for _ in range(150):
+        moves = random_moves(rng, profile, int(rng.integers(1, 7)))
+        bound = float(minimum_times(moves[0], moves[1], moves[3], moves[4]).max())
+        together = _smallest_common_duration(profile, moves, bound)
+        by_runs, _ = _common_duration(profile, moves, None)
+        if by_runs is None:
+            assert together is None
+        else:
+            assert together == pytest.approx(by_runs, rel=1e-12)
+
+
+def test_a_start_left_outside_by_rounding_is_moved_onto_the_common_run():
+    rng = np.random.default_rng(22)
+    for _ in range(20):
+        moves = random_moves(rng, 'quintic', 3)
+        bound = float(minimum_times(moves[0], moves[1], moves[3], moves[4]).max())
+        exact = _smallest_common_duration('quintic', moves, bound)
+        if exact is None or exact <= bound * (1.0 + 1e-6):
+            continue  # no common duration, or the bound itself is the answer
+        found = _onto_common_run('quintic', moves, exact * (1.0 - 1e-7), exact * (1.0 + 1e-3))
+        # Feasibility allows half of LIMIT_TOLERANCE (1e-9): the bisection may stop that
+        # much below the exact candidate.
+        assert found == pytest.approx(exact, rel=1e-9)
 
 
 def test_trajectory_peaks_with_a_tiny_cubic_term_in_the_slope():

@@ -7,10 +7,13 @@ smallest duration in every joint's set (synchronisation), then the fit (the call
 Step 1: the durations at which a joint's peak ``|v|`` or ``|a|`` can equal its limit are
 found exactly (:mod:`traj_gen_ros.polynomial_candidates`: ends, and interior extrema from
 the roots of resultant polynomials). Between two consecutive candidates feasibility
-cannot change, so checking each candidate and one duration inside each gap with the
-exact peaks (:mod:`traj_gen_ros.move_peaks`) gives the joint's feasible durations as
-closed intervals ("runs"): nothing is sampled. The synchronised duration is the smallest
-run start that lies in a run of every joint.
+cannot change, so checking candidates and one duration inside each gap with the exact
+peaks (:mod:`traj_gen_ros.move_peaks`) decides feasibility everywhere: nothing is
+sampled. Up to 16 joints, every joint is checked at every candidate above the
+second-order lower bound (and in each gap): the first where all are feasible is the
+synchronised duration. Beyond that, each analysed joint's feasible durations come out as
+closed intervals ("runs") and the synchronised duration is the smallest run start that
+lies in a run of every joint.
 
 Units: rad, rad/s, rad/s², s.
 """
