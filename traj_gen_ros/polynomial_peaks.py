@@ -18,9 +18,9 @@ import numpy as np
 def unit_peaks(polynomials: np.ndarray) -> np.ndarray:
     """Largest ``|p(τ)|`` on ``[0, 1]`` of ascending polynomials ``(count, n)``, ``n ≤ 5``."""
     count, size = polynomials.shape
-    used = np.flatnonzero(np.abs(polynomials).max(axis=0, initial=0.0))
+    used = np.abs(polynomials).max(axis=0, initial=0.0).nonzero()[0]
     degree = int(used[-1]) if used.size else 0
-    slope = polynomials[:, 1:degree + 1] * np.arange(1, degree + 1)
+    slope = polynomials[:, 1:degree + 1] * _POWERS[1:degree + 1]
     if degree <= 1:
         points = np.zeros((count, 0))
     elif degree == 2:
@@ -35,27 +35,25 @@ def unit_peaks(polynomials: np.ndarray) -> np.ndarray:
         # towards the true one; it is attained at one of them.
         points = np.concatenate([_cubic_roots(slope), _quadratic_roots(
             slope[:, 0], slope[:, 1], slope[:, 2])], axis=1)
-        points = _polished(slope, np.clip(points, 0.0, 1.0))
-    points = np.concatenate([np.clip(points, 0.0, 1.0), np.zeros((count, 1)),
-                             np.ones((count, 1))], axis=1)
-    value = np.zeros_like(points)
-    for power in range(degree, -1, -1):
-        value = value * points + polynomials[:, power:power + 1]
-    return np.abs(value).max(axis=1)
+        points = _polished(slope, np.minimum(np.maximum(points, 0.0), 1.0))
+    # Every candidate, and both ends: (count, candidates + 2).
+    points = np.concatenate([np.minimum(np.maximum(points, 0.0), 1.0),
+                             _UNIT_ENDS.repeat(count, axis=0)], axis=1)
+    powers = points[:, :, None] ** _POWERS[:degree + 1]
+    values = np.einsum('cmk,ck->cm', powers, polynomials[:, :degree + 1])
+    return np.maximum.reduce(np.abs(values), axis=1)
 
 
 def _polished(slope: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Two Newton steps on ``p'`` (ascending ``slope`` rows) from ``points``, kept in [0, 1]."""
-    curvature = slope[:, 1:] * np.arange(1, slope.shape[1])
+    size = slope.shape[1]
+    pair = np.zeros((2, slope.shape[0], size))  # p' and p'' (padded), one product
+    pair[0] = slope
+    pair[1, :, :-1] = slope[:, 1:] * _POWERS[1:size]
     for _ in range(2):
-        value = np.zeros_like(points)
-        bend = np.zeros_like(points)
-        for power in range(slope.shape[1] - 1, -1, -1):
-            value = value * points + slope[:, power:power + 1]
-        for power in range(curvature.shape[1] - 1, -1, -1):
-            bend = bend * points + curvature[:, power:power + 1]
-        step = value / np.where(bend == 0.0, np.inf, bend)
-        points = np.clip(points - step, 0.0, 1.0)
+        value, bend = np.einsum('cmk,jck->jcm', points[:, :, None] ** _POWERS[:size], pair)
+        bend[bend == 0.0] = np.inf
+        points = np.minimum(np.maximum(points - value / bend, 0.0), 1.0)
     return points
 
 
@@ -74,9 +72,10 @@ def _quadratic_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> np.ndarr
     delta, c0, c1, c2 = discriminant(c0, c1, c2)
     half = -0.5 * (c1 + np.copysign(np.sqrt(np.maximum(delta, 0.0)), c1))
     real = (delta >= 0.0) & (half != 0.0)
-    half = np.where(real, half, 1.0)
-    first = np.where(real & (c2 != 0.0), half / np.where(c2 == 0.0, 1.0, c2), 0.0)
-    return np.stack([first, np.where(real, c0 / half, 0.0)], axis=1)
+    roots = np.zeros((c0.size, 2))
+    np.divide(half, c2, out=roots[:, 0], where=real & (c2 != 0.0))
+    np.divide(c0, half, out=roots[:, 1], where=real)
+    return roots
 
 
 def discriminant(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -102,10 +101,11 @@ def _cubic_roots(cubics: np.ndarray) -> np.ndarray:
 
     The depressed cubic ``t³ + p t + q`` (``τ = t - c2/(3 c3)``): three real roots by the
     trigonometric formula when ``Δ = (q/2)² + (p/3)³ ≤ 0``, else Cardano's one. Rows whose
-    cubic term is negligible (1e-9 of the largest) are quadratics.
+    cubic term is negligible (1e-9 of the largest) give 0: :func:`unit_peaks` takes the
+    roots of their quadratic part anyway.
     """
     c0, c1, c2, c3 = cubics.T
-    cubic = np.abs(c3) > 1e-9 * np.abs(cubics).max(axis=1)
+    cubic = np.abs(c3) > 1e-9 * np.maximum.reduce(np.abs(cubics), axis=1)
     leading = np.where(cubic, c3, 1.0)
     a, b, c = c2 / leading, c1 / leading, c0 / leading
     p = b - a * a / 3.0
@@ -115,11 +115,12 @@ def _cubic_roots(cubics: np.ndarray) -> np.ndarray:
     one = np.cbrt(-0.5 * q + root) + np.cbrt(-0.5 * q - root)
     radius = 2.0 * np.sqrt(np.maximum(-p / 3.0, 0.0))
     cosine = 3.0 * q / np.where(radius * p == 0.0, np.inf, p * radius)
-    angle = np.arccos(np.clip(cosine, -1.0, 1.0)) / 3.0
+    angle = np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0)) / 3.0
     three = radius[:, None] * np.cos(angle[:, None] - _THIRDS)
     roots = np.where((discriminant > 0.0)[:, None], one[:, None], three) - a[:, None] / 3.0
-    return np.where(cubic[:, None], roots, np.concatenate(
-        [_quadratic_roots(c0, c1, c2), np.zeros((len(c0), 1))], axis=1))
+    return np.where(cubic[:, None], roots, 0.0)
 
 
 _THIRDS = 2.0 * np.pi * np.arange(3) / 3.0
+_POWERS = np.arange(6.0)
+_UNIT_ENDS = np.array([[0.0, 1.0]])
