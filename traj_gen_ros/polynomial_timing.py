@@ -210,6 +210,9 @@ def _smallest_common_duration(profile: str, moves: tuple, bound: float) -> float
     bound = max(bound * (1.0 - 1e-9), SHORTEST_POLYNOMIAL)
     durations, _ = candidates(profile, *moves, shortest=bound)
     points = np.sort(np.concatenate([durations, [bound]]))
+    distinct = np.ones(points.size, dtype=bool)  # joints alike share candidates
+    distinct[1:] = points[1:] != points[:-1]
+    points = points[distinct]
     gaps = np.empty_like(points)
     gaps[:-1] = 0.5 * (points[:-1] + points[1:])
     gaps[-1] = 2.0 * points[-1]
