@@ -1,11 +1,14 @@
 """
 Test harness: run the generator as a subprocess and talk to it over DDS.
 
-Importing this module isolates the test process: its own ROS_DOMAIN_ID (from the pid)
-and discovery limited to localhost; the node subprocesses inherit the same environment.
+Importing this module isolates the test process: its own ROS_DOMAIN_ID and discovery
+limited to localhost; the node subprocesses inherit the same environment. The domain is
+claimed with a lock file, so that runs side by side on one machine (CI beside a
+developer's ``make test``) never share one.
 """
 
 import contextlib
+import fcntl
 import os
 from pathlib import Path
 import signal
@@ -34,7 +37,32 @@ JOINTS = [f'joint_{index}' for index in range(1, 7)]
 MAX_VELOCITY = np.array([2.0, 2.0, 2.0, 3.0, 3.0, 3.0])
 MAX_ACCELERATION = np.array([4.0, 4.0, 4.0, 6.0, 6.0, 6.0])
 
-DOMAIN_ID = 1 + (os.getpid() + int(os.environ.get('PYTEST_XDIST_WORKER', 'gw0')[2:] or 0)) % 100
+_DOMAIN_LOCKS = []  # open lock files: a domain is held while this process lives
+
+
+def _claim_domain() -> int:
+    """
+    Return a ROS domain (1-100) that no other process importing this module holds.
+
+    Each domain has a lock file in the temporary directory; the first one (from the pid
+    on) whose exclusive lock this process gets is its domain until it exits (the lock
+    goes with the process, also when it is killed; children do not inherit it).
+    """
+    first = os.getpid() % 100
+    for offset in range(100):
+        domain = 1 + (first + offset) % 100
+        handle = open(Path(tempfile.gettempdir()) / f'traj_gen_ros_domain_{domain}.lock', 'w')
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            handle.close()
+            continue
+        _DOMAIN_LOCKS.append(handle)
+        return domain
+    return 1 + first  # a hundred runs at once: share one
+
+
+DOMAIN_ID = _claim_domain()
 os.environ['ROS_DOMAIN_ID'] = str(DOMAIN_ID)
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 os.environ.pop('ROS_LOCALHOST_ONLY', None)
