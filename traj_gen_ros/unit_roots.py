@@ -136,7 +136,10 @@ def column_roots(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     size = polynomials.shape[0]
     scale = np.maximum.reduce(np.abs(polynomials))
     nonzero = scale.nonzero()[0]
-    normalised = polynomials[:, nonzero] / scale[nonzero]
+    if nonzero.size == scale.size:  # usually: no row to leave out
+        normalised = polynomials / scale
+    else:
+        normalised = polynomials[:, nonzero] / scale[nonzero]
     count = nonzero.size
     coefficients = (_by_columns(size, 'pieces') @ normalised).reshape(size, -1)
     # Every piece that may hold a root is split into eighths (one product) and classified;
