@@ -1,4 +1,4 @@
-"""The stream's schedule on a fake clock: ticks, splicing at unpublished ticks, NaN guard."""
+"""The stream on a fake clock: ticks, splicing at an unpublished tick or the last published one."""
 
 import numpy as np
 from rclpy.serialization import deserialize_message
@@ -18,9 +18,13 @@ def make_stream():
     return stream, clock, published, errors
 
 
-def tick(stream, clock):
-    clock[0] += PERIOD
-    stream._publish_tick()
+def tick(stream, clock, late=0):
+    """Publish the next tick of the grid, sampled ``late`` ns after its deadline."""
+    deadline = stream.next_start()
+    clock[0] = deadline + late
+    stream._publish_tick(deadline)
+    stream._next_tick_ns = deadline + PERIOD  # as the stream thread does after a tick
+    return deadline
 
 
 def decoded(data):
@@ -28,24 +32,47 @@ def decoded(data):
     return np.array(message.position), np.array(message.velocity)
 
 
-def test_a_motion_starts_at_an_unpublished_tick_and_never_at_a_published_one():
+def test_a_motion_starts_at_its_tick_if_ready_before_it_is_published():
     stream, clock, published, _ = make_stream()
     tick(stream, clock)
     start = stream.next_start()
     assert start > clock[0]
-    assert not stream.splice(clock[0], held([1.0, 1.0]))  # that tick is out already
-    assert stream.splice(start, held([1.0, 1.0]))
-    clock[0] = start
-    stream._publish_tick()
+    assert stream.splice(start, held([1.0, 1.0])) == start
+    assert tick(stream, clock) == start
     assert decoded(published[-1])[0].tolist() == [1.0, 1.0]
     assert stream.next_start() > clock[0]
+
+
+def ramp(velocity):
+    """Return a motion from (0.1, 0.2) at ``velocity`` (rad/s) for 1 s."""
+    coefficients = np.zeros((1, 2, 2))
+    coefficients[0, 0] = [0.1, 0.2]
+    coefficients[0, 1] = velocity
+    return PlannedMotion(Trajectory(np.array([0.0, 1.0]), coefficients), 'ramp',
+                         np.array([0.1, 0.2]) + velocity)
+
+
+def test_a_motion_planned_from_the_last_published_setpoint_takes_over_at_the_next_tick():
+    stream, clock, published, _ = make_stream()
+    tick(stream, clock)
+    start = tick(stream, clock, late=50_000)  # the start tick went out from the hold
+    assert stream.splice(start, ramp(1.0)) is None  # sampled 50 us after it
+    assert stream.last_published() == start + 50_000
+    assert stream.splice(start + 50_000, ramp(1.0)) == start + PERIOD
+    assert tick(stream, clock, late=50_000) == start + PERIOD
+    position, velocity = decoded(published[-1])
+    assert np.allclose(position, [0.1 + 0.01, 0.2 + 0.01]) and velocity.tolist() == [1, 1]
+    # Once a setpoint after the start is out, splicing there would jump: refused.
+    assert stream.splice(start + 50_000, ramp(-1.0)) is None
+    assert decoded(published[-1])[1].tolist() == [1.0, 1.0]
 
 
 def test_a_non_finite_setpoint_is_never_published_the_stream_holds():
     stream, clock, published, errors = make_stream()
     tick(stream, clock)
     broken = Trajectory(np.array([0.0, 1.0]), np.full((1, 2, 2), np.nan))
-    assert stream.splice(stream.next_start(), PlannedMotion(broken, 'broken', np.zeros(2)))
+    start = stream.next_start()
+    assert stream.splice(start, PlannedMotion(broken, 'broken', np.zeros(2))) == start
     for _ in range(3):
         tick(stream, clock)
         position, velocity = decoded(published[-1])

@@ -70,15 +70,19 @@ class Answers:
             values['received'] = str(received)
         return values
 
-    def trajectory(self, start_ns: int, motion: PlannedMotion, rate_hz: float) -> bytes:
+    def trajectory(self, first_ns: int, offset: float, motion: PlannedMotion,
+                   rate_hz: float) -> bytes:
         """
         Sample the plan every ``1/rate_hz`` s into a ``JointTrajectory`` (CDR bytes).
 
-        Raises :class:`~traj_gen_ros.request_parsing.RequestError` if a sample is not finite.
+        From its first streamed setpoint, ``offset`` s into the plan (0 unless the plan took
+        over a tick after its start), stamped ``first_ns``: the message shows what the
+        stream publishes. Raises :class:`~traj_gen_ros.request_parsing.RequestError` if a
+        sample is not finite.
         """
-        times, positions, velocities, accelerations = sample_motion(motion, rate_hz)
-        time_ns = np.round(times * 1e9).astype(np.int64)
-        return joint_trajectory_cdr(start_ns, list(self._joint_names()), time_ns, positions,
+        times, positions, velocities, accelerations = sample_motion(motion, rate_hz, offset)
+        time_ns = np.round((times - offset) * 1e9).astype(np.int64)
+        return joint_trajectory_cdr(first_ns, list(self._joint_names()), time_ns, positions,
                                     velocities, accelerations)
 
     def publish_trajectory(self, message: bytes) -> None:
@@ -86,14 +90,14 @@ class Answers:
         self._trajectory.publish(message)
 
     def accepted(self, request: Request, motion: PlannedMotion, now_ns: int,
-                 start_ns: int) -> None:
-        """Answer OK with the plan's profile, duration and start delay."""
+                 first_ns: int) -> None:
+        """Answer OK with the plan's profile, duration and delay to its first setpoint."""
         self._answer_superseded()
         duration = motion.plan.duration
         joints = len(self._joint_names())
         text = f'accepted: profile={motion.profile}, duration={duration:.3f} s, joints={joints}'
-        delay = (start_ns - now_ns) * 1e-9
-        if request.stamp_ns > now_ns and request.stamp_ns == start_ns:
+        delay = (first_ns - now_ns) * 1e-9
+        if request.stamp_ns > now_ns and request.stamp_ns == first_ns:
             text += f', starts in {delay:.3f} s'
         if motion.note:
             text += f' ({motion.note})'

@@ -104,7 +104,7 @@ class TrajectoryGenerator(Node):
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._diagnostics = NodeDiagnostics(self, lambda: self._config, self._limits,
                                             self._answers, self._rate_meter)
-        self._answers.trajectory(0, held(initial), self._config.rate_hz)  # warm up
+        self._answers.trajectory(0, 0.0, held(initial), self._config.rate_hz)  # warm up
         priority = self._stream.start()
         self.get_logger().info(
             f'streaming {len(self._config.joints)} joints at {self._config.rate_hz:g} Hz '

@@ -9,19 +9,21 @@ answers the older valid ones "superseded", and executes the newest right away:
 1. the start is the stream's next tick not yet published (or the request's future
    ``header.stamp``), and the start state is the schedule's setpoint there;
 2. plan from that state (:mod:`traj_gen_ros.motion_planning`), refusing with a reason;
-3. splice it into the schedule at the start: the stream samples it there and publishes its
-   first setpoint at that tick (:mod:`traj_gen_ros.stream`);
-4. sample the plan for ``~/trajectory`` and publish it, then the OK status once the stream
-   has published the first setpoint of the new motion (a client reading the answer sees
-   it started; a delayed start is answered at once) (:mod:`traj_gen_ros.answers`).
+3. splice it into the schedule at the start (:mod:`traj_gen_ros.stream`): the stream
+   publishes its first setpoint at that tick;
+4. sample the plan for ``~/trajectory`` from that first setpoint and publish it, then the
+   OK status once the stream has published that setpoint (a client reading the answer
+   sees it started; a delayed start is answered at once) (:mod:`traj_gen_ros.answers`).
 
 Sampling comes after the splice so that it does not delay the start: a plan that reaches
 the splice has finite coefficients and finite, checked peaks, so its samples are finite.
 
-The start tick is the first one at least the last request's planning time away (so the
-plan is ready by then). If the stream published the start tick while the request was
-being planned anyway (a long path, a loaded machine), the request is planned again from a
-later tick, at most ``PLAN_ATTEMPTS`` times, then refused.
+The start tick is the first one at least the median planning time of the last requests
+away (so the plan is usually ready by then). If the stream published it while the request
+was being planned anyway (a cold cache, a long path, a loaded machine), the request is
+planned again from the setpoint the stream published last, exactly as published, and
+takes over at the next tick if ready by then: one period later, not a re-plan far ahead.
+After ``PLAN_ATTEMPTS`` such misses it is refused.
 """
 
 from __future__ import annotations
@@ -63,14 +65,16 @@ REQUEST_DEPTH = 1000
 #: the next round then drains a batch at once, so the executor thread holds the GIL less
 #: and the stream keeps its rate. A request after a quiet spell is not delayed.
 REQUEST_ROUND_PERIOD = 0.005
-#: A new motion starts at the first tick at least the median planning and sampling time
-#: of the last RECENT requests away, so that it is ready by then (a few hundred us: most
-#: often the very next tick). One whose start tick the stream passed while it was planned
-#: anyway is planned again from a later tick (twice the time it took, at most
-#: MAX_MARGIN_NS away), at most PLAN_ATTEMPTS times in all.
+#: A new motion starts at the first tick at least the median planning time of the last
+#: RECENT requests away, so that it is ready by then (a few hundred us: most often the
+#: very next tick). One whose start tick the stream published while it was planned is
+#: planned again from the last published setpoint (to take over at the next tick) if it
+#: took at most RETRY_PERIODS periods, else (and after that) from a tick twice the time it
+#: took away; at most PLAN_ATTEMPTS times in all. Margins are capped at MAX_MARGIN_NS.
 RECENT = 5
 MAX_MARGIN_NS = 500_000_000
 PLAN_ATTEMPTS = 3
+RETRY_PERIODS = 2
 #: The OK status waits at most this long (s) for the motion's first setpoint.
 ANSWER_WAIT = 0.1
 
@@ -180,28 +184,37 @@ class RequestHandler:
         placed = self._plan_and_splice(request, plan, config)
         if placed is None:
             return None
-        motion, now_ns, start_ns = placed
+        motion, now_ns, start_ns, first_ns = placed
         try:
-            message = self._answers.trajectory(start_ns, motion, config.rate_hz)
+            message = self._answers.trajectory(first_ns, (first_ns - start_ns) * 1e-9, motion,
+                                               config.rate_hz)
         except Exception as error:  # noqa: BLE001 - checked plans are finite: a bug if not
             self._log_error(f'sampling an accepted {request.kind} failed: {error!r}; braking')
             self._brake(config)
             self._answers.refused(request, f'internal error: {error}')
             return None
         self._answers.publish_trajectory(message)
-        if start_ns - now_ns <= ANSWER_WAIT * 1e9:
-            self._stream.wait_published(start_ns, ANSWER_WAIT)
-        self._answers.accepted(request, motion, now_ns, start_ns)
+        if first_ns - now_ns <= ANSWER_WAIT * 1e9:
+            self._stream.wait_published(first_ns, ANSWER_WAIT)
+        self._answers.accepted(request, motion, now_ns, first_ns)
         return motion
 
     def _plan_and_splice(self, request: Request, plan: Planner, config: Config
-                         ) -> tuple[PlannedMotion, int, int] | None:
-        """Return the motion spliced in, the time it was planned and its start (ns)."""
+                         ) -> tuple[PlannedMotion, int, int, int] | None:
+        """
+        Return the motion spliced in, when it was planned, its start and first tick (ns).
+
+        First from the tick at least the recent median planning time away. If the stream
+        published it meanwhile: again from the setpoint it published last (a re-plan is
+        faster than a cold first one: usually ready for the next tick), unless planning
+        took over ``RETRY_PERIODS`` periods (a long path); then, and after a second miss,
+        from the tick twice the last attempt's time away.
+        """
         margin_ns = int(statistics.median(self._recent_ns))
-        for _ in range(PLAN_ATTEMPTS):
+        start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
+        for attempt in range(PLAN_ATTEMPTS):
             began = time.perf_counter_ns()
             now_ns = self._now_ns()
-            start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
             state, hold_at = self._stream.state_at(start_ns)
             try:
                 motion = plan(config, state, hold_at)
@@ -216,14 +229,18 @@ class RequestHandler:
                 self._answers.refused(request, f'internal error: {error}')
                 return None
             elapsed_ns = time.perf_counter_ns() - began
-            if self._stream.splice(start_ns, motion):
+            first_ns = self._stream.splice(start_ns, motion)
+            if first_ns is not None:
                 self._recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
-                return motion, now_ns, start_ns
-            used_ns = margin_ns
-            margin_ns = min(2 * elapsed_ns, MAX_MARGIN_NS)
+                return motion, now_ns, start_ns, first_ns
+            if attempt == 0 and elapsed_ns <= RETRY_PERIODS * config.period_ns:
+                start_ns = max(request.stamp_ns, self._stream.last_published())
+            else:
+                margin_ns = min(2 * elapsed_ns, MAX_MARGIN_NS)
+                start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
         self._answers.refused(request, f'the stream passed its start {PLAN_ATTEMPTS} times '
-                              f'while it was planned (last margin {used_ns * 1e-9:.3f} s); '
-                              'resend it')
+                              f'while it was planned (the last attempt took '
+                              f'{elapsed_ns * 1e-9:.3f} s); resend it')
         return None
 
     def _brake(self, config: Config) -> None:

@@ -5,10 +5,12 @@ The :class:`Stream` owns the :class:`~traj_gen_ros.schedule.Schedule` and the th
 samples it. Each tick has a deadline on a fixed grid of the node clock (absolute times, so
 a late wake-up does not shift the ticks after it); at the deadline the thread samples the
 schedule at the current time and publishes the ``JointState`` bytes. A new motion is
-spliced in at the next tick that the stream has not published yet
-(:meth:`Stream.next_start`, :meth:`Stream.splice`): its start state is the schedule's
-state at that tick, so position, velocity and acceleration are continuous at the switch,
-and the stream publishes its first setpoint at that tick.
+planned from the schedule's state at a tick the stream has not published yet
+(:meth:`Stream.next_start`), or at the last setpoint it published
+(:meth:`Stream.last_published`), and spliced in there (:meth:`Stream.splice`) if the
+stream has published nothing after it. So every setpoint published is the old motion's
+before the switch or the new one's after it (the last published setpoint, exactly both),
+and position, velocity and acceleration are continuous at the switch.
 
 On a busy machine the thread asks for a real-time priority (``SCHED_FIFO``) and, if that
 is not permitted, a lower nice value; if neither is, it runs as it is (see
@@ -106,7 +108,8 @@ class Stream:
         # setpoint has been published.
         self._lock = threading.Lock()
         self._published = threading.Condition(self._lock)
-        self._last_published_ns = -(2 ** 62)
+        self._last_published_ns = -(2 ** 62)  # when the last setpoint was sampled
+        self._last_tick_ns = -(2 ** 62)  # the tick (deadline) it was published for
         self._next_tick_ns = now_ns()
         self.stopping = threading.Event()
         self.priority = 'not started'
@@ -146,13 +149,34 @@ class Stream:
         with self._lock:
             return self._schedule.state_at(time_ns), self._schedule.end_position(time_ns)
 
-    def splice(self, start_ns: int, motion: PlannedMotion) -> bool:
-        """Run ``motion`` from ``start_ns``; False if the stream has published that time."""
+    def last_published(self) -> int:
+        """
+        Return when the last setpoint was sampled (ns): a start that nothing published follows.
+
+        The schedule's state then is exactly that setpoint, so a motion planned from it
+        and spliced there before the next tick (:meth:`splice`) continues it seamlessly.
+        """
         with self._lock:
-            if self._last_published_ns >= start_ns:
-                return False
+            return self._last_published_ns
+
+    def splice(self, start_ns: int, motion: PlannedMotion) -> int | None:
+        """
+        Run ``motion`` from ``start_ns``; return the tick (ns) of its first setpoint.
+
+        That is ``start_ns`` itself if the stream has not got there yet, or the next tick
+        if ``start_ns`` is the last setpoint published. ``None``, splicing nothing, if the
+        stream has published a setpoint after ``start_ns``: the motion would jump.
+        """
+        with self._lock:
+            if self._last_published_ns > start_ns:
+                return None
+            first_ns = start_ns
+            if self._last_published_ns == start_ns:
+                first_ns = self._next_tick_ns
+                if first_ns <= self._last_tick_ns:  # the stream is between two ticks
+                    first_ns = self._last_tick_ns + self._period_ns()
             self._schedule.splice(start_ns, motion, self._now_ns())
-            return True
+            return first_ns
 
     def wait_published(self, time_ns: int, timeout: float) -> bool:
         """
@@ -199,7 +223,7 @@ class Stream:
             if not self._wait_until(next_ns, period_ns):
                 return
             try:
-                self._publish_tick()
+                self._publish_tick(next_ns)
             except Exception as error:  # noqa: BLE001 - the stream outlives any one failure
                 if self.stopping.is_set():
                     return  # shutting down (SIGINT/SIGTERM): the publisher is gone
@@ -208,7 +232,8 @@ class Stream:
             if now_ns - next_ns >= period_ns:
                 next_ns = now_ns
 
-    def _publish_tick(self) -> None:
+    def _publish_tick(self, tick_ns: int) -> None:
+        """Sample the schedule now and publish it as the setpoint of tick ``tick_ns``."""
         with self._lock:
             now_ns = self._now_ns()
             if now_ns <= self._last_published_ns:
@@ -222,6 +247,7 @@ class Stream:
                 self._schedule.splice(now_ns, held(position), now_ns)
             self._last_position = position
             self._last_published_ns = now_ns
+            self._last_tick_ns = tick_ns
         if not finite:
             self._on_error('stream: the schedule gave a non-finite setpoint: holding')
         self._publish(joint_state_cdr(now_ns, self._names_cdr, position, velocity))

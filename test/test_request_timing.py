@@ -1,0 +1,142 @@
+"""
+When a request's plan is late for its start tick.
+
+The real handler, stream and answers on a fake clock (no stream thread: the test publishes
+the ticks), the answers in an rclpy node.
+
+A plan that the stream overtakes is planned again from the setpoint published last,
+exactly as published, and takes over at the next tick; ``~/trajectory`` then starts at
+that tick.
+"""
+
+from diagnostic_msgs.msg import DiagnosticStatus
+import node_harness  # noqa: F401 - isolates the DDS domain of this run
+import numpy as np
+import pytest
+import rclpy
+from rclpy.serialization import deserialize_message
+from sensor_msgs.msg import JointState
+from traj_gen_ros.answers import Answers, Request
+from traj_gen_ros.motion_planning import held, plan_request
+from traj_gen_ros.node_config import make_config
+from traj_gen_ros.request_handler import RequestHandler
+from traj_gen_ros.request_parsing import parse_goal
+from traj_gen_ros.stream import Stream
+from trajectory_msgs.msg import JointTrajectory
+
+PERIOD = 10_000_000  # 100 Hz
+JOINTS = ['a', 'b']
+CONFIG = make_config(joints=JOINTS, rate_hz=100.0, profile='cubic',
+                     via_velocities='heuristic', max_velocity=1.0, max_acceleration=2.0,
+                     lspb_acceleration=0.0)
+
+
+@pytest.fixture
+def node():
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node('request_timing_test', context=context)
+    yield node
+    node.destroy_node()
+    rclpy.shutdown(context=context)
+
+
+class Rig:
+    """A stream on a fake clock that publishes a tick whenever the test says so."""
+
+    def __init__(self, node):
+        self.clock = [10**12]
+        self.states, self.statuses, self.trajectories = [], [], []
+        self.stream = Stream(held([0.0, 0.0]), JOINTS, lambda: self.clock[0], lambda: PERIOD,
+                             self.states.append, print)
+        self.answers = Answers(node, lambda: JOINTS)
+        self.answers.report = lambda level, text, values, log=True: \
+            self.statuses.append((level, text, values))
+        self.answers.publish_trajectory = self.trajectories.append
+        self.handler = RequestHandler(lambda: CONFIG, self.stream, self.answers,
+                                      lambda: self.clock[0], print)
+
+    def tick(self, late=0):
+        deadline = self.stream.next_start()
+        self.clock[0] = deadline + late
+        self.stream._publish_tick(deadline)
+        self.stream._next_tick_ns = deadline + PERIOD
+        return deadline
+
+    def state(self, index=-1):
+        message = deserialize_message(self.states[index], JointState)
+        stamp = message.header.stamp.sec * 10**9 + message.header.stamp.nanosec
+        return stamp, np.array(message.position), np.array(message.velocity)
+
+
+def goal(rig, positions, planning_ticks):
+    """Execute a goal whose planning lets ``planning_ticks`` ticks go out meanwhile."""
+    request = parse_goal(JOINTS, JOINTS, positions)
+    calls = []
+
+    def slow_planner(config, state, hold_at):
+        calls.append(state)
+        if len(calls) == 1:
+            for _ in range(planning_ticks):
+                rig.tick(late=30_000)
+        return plan_request(config, state, hold_at, request)
+    values = rig.answers.values('goal', '', 0)
+    return rig.handler.execute(Request('goal', values, 0, request), slow_planner), calls
+
+
+def test_a_plan_on_time_starts_at_its_tick(node):
+    rig = Rig(node)
+    rig.tick()
+    motion, calls = goal(rig, [0.5, -0.2], planning_ticks=0)
+    assert motion is not None and len(calls) == 1
+    start = rig.tick()
+    trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
+    assert trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec == start
+    assert rig.statuses[-1][0] == DiagnosticStatus.OK
+
+
+def test_a_plan_the_stream_overtook_restarts_from_the_published_setpoint(node):
+    rig = Rig(node)
+    rig.tick()
+    first, _ = goal(rig, [0.5, -0.2], planning_ticks=0)  # a moving arm
+    for _ in range(20):
+        rig.tick()
+    motion, calls = goal(rig, [-0.3, 0.4], planning_ticks=1)  # its start tick went out
+    assert motion is not None and len(calls) == 2
+    published_at, position, velocity = rig.state()
+    # The second attempt starts from exactly the setpoint published while it planned.
+    assert calls[1].position.tolist() == position.tolist()
+    assert calls[1].velocity.tolist() == velocity.tolist()
+    assert np.all(velocity != 0.0)
+    # It takes over at the next tick, and ~/trajectory starts there.
+    trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
+    stamp = trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec
+    takeover = rig.tick()
+    assert stamp == takeover
+    stamp_ns, new_position, new_velocity = rig.state()
+    elapsed = (stamp_ns - published_at) * 1e-9
+    expected = motion.plan.sample(elapsed)
+    assert np.allclose(new_position, expected[0][0], atol=1e-12)
+    assert np.allclose(new_velocity, expected[1][0], atol=1e-12)
+    # Within the limits from the published setpoint to the first new one.
+    assert np.all(np.abs(new_velocity - velocity) <= CONFIG.max_acceleration * elapsed * 1.001)
+    point = trajectory.points[0]
+    offset = (takeover - published_at) * 1e-9
+    assert np.allclose(point.positions, motion.plan.sample(offset)[0][0], atol=1e-12)
+    assert rig.statuses[-1][0] == DiagnosticStatus.OK
+
+
+def test_a_request_overtaken_every_time_is_refused_with_the_reason(node):
+    rig = Rig(node)
+    rig.tick()
+    request = parse_goal(JOINTS, JOINTS, [0.5, -0.2])
+
+    def always_late(config, state, hold_at):
+        rig.tick()
+        rig.tick()
+        return plan_request(config, state, hold_at, request)
+    values = rig.answers.values('goal', '', 0)
+    assert rig.handler.execute(Request('goal', values, 0, request), always_late) is None
+    level, text, _ = rig.statuses[-1]
+    assert level == DiagnosticStatus.ERROR and 'passed its start 3 times' in text
+    assert rig.state()[1].tolist() == [0.0, 0.0]  # still holding
