@@ -98,10 +98,29 @@ def _end_table(shapes: np.ndarray) -> np.ndarray:
     return table.reshape(-1, 5)
 
 
+def _useful_ends(table: np.ndarray) -> np.ndarray:
+    """
+    ``(3 powers · ends, 5 inputs)``: the end quadratics of ``table`` that can give a duration.
+
+    A quadratic with one power of ``T`` at most, for every input (``c Tᵏ = 0``), has no
+    root but ``T = 0``: the quintic's velocity and acceleration at both ends, and the
+    cubic's velocity there, are fixed (``v0``, ``a0``, rest), whatever ``T``, and so is
+    where the quintic's extrema enter (``∂P/∂τ = a0 T²`` or ``0`` at some ends). Those
+    are left out, and so are repeats (``∂P/∂τ`` does not depend on ``σ``).
+    """
+    quadratics = table.reshape(3, -1, 5).transpose(1, 0, 2)  # (ends, 3 powers, 5 inputs)
+    kept: list[np.ndarray] = []
+    for quadratic in quadratics:
+        if np.count_nonzero(quadratic.any(axis=1)) >= 2 and \
+                not any(np.array_equal(quadratic, other) for other in kept):
+            kept.append(quadratic)
+    return np.ascontiguousarray(np.array(kept).transpose(1, 0, 2).reshape(-1, 5))
+
+
 _LIMIT_POWER = (1, 0)  # the limit term multiplies T (velocity), T² (acceleration)
 _SIGNS = np.array([1.0, -1.0])  # σ
 _POWERS = np.arange(6.0)[:, None]
-_END_TABLES = {profile: _end_table(shapes) for profile, shapes in _SHAPES.items()}
+_END_TABLES = {profile: _useful_ends(_end_table(shapes)) for profile, shapes in _SHAPES.items()}
 
 
 def _value_table(shapes: np.ndarray) -> np.ndarray:
@@ -119,7 +138,12 @@ def _value_table(shapes: np.ndarray) -> np.ndarray:
     return table.reshape(-1, 6)
 
 
-_VALUE_TABLES = {profile: _value_table(shapes) for profile, shapes in _SHAPES.items()}
+# The same by power, degree in τ and kind (rows), so that one product with the inputs
+# gives every column's P(τ, T) as (3 powers, 6 degrees, 4·joints columns).
+_COEFFICIENT_TABLES = {
+    profile: np.ascontiguousarray(
+        _value_table(shapes).reshape(4, 3, 5, 6).transpose(1, 3, 0, 2).reshape(-1, 5))
+    for profile, shapes in _SHAPES.items()}
 
 
 def _positive_roots(p2: np.ndarray, p1: np.ndarray, p0: np.ndarray) -> np.ndarray:
@@ -134,8 +158,11 @@ def _positive_roots(p2: np.ndarray, p1: np.ndarray, p0: np.ndarray) -> np.ndarra
     delta, p0, p1, p2 = discriminant(p0, p1, p2)  # rescaled where it would overflow
     half = -0.5 * (p1 + np.copysign(np.sqrt(np.maximum(delta, 0.0)), p1))
     half[delta < -1e-12 * (p1 * p1 + np.abs(4.0 * p2 * p0))] = np.nan  # complex pair
+    roots = np.empty((2, half.size))
     with np.errstate(divide='ignore', invalid='ignore'):
-        return np.array([half / p2, p0 / half])
+        np.divide(half, p2, out=roots[0])
+        np.divide(p0, half, out=roots[1])
+    return roots
 
 
 def _block_table(blocks: list[tuple[int, np.ndarray, list[int]]], rows: int) -> np.ndarray:
@@ -215,6 +242,36 @@ def _interior_polynomials(profile: str, *moves: np.ndarray) -> np.ndarray:
     return _interior_columns(profile, *moves).reshape(10, 2, 2, -1).transpose(1, 2, 3, 0)
 
 
+def durations(profile: str, displacement: np.ndarray, velocity: np.ndarray,
+              acceleration: np.ndarray, max_velocity: np.ndarray,
+              max_acceleration: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Every root of the quadratics in ``T`` (flat; NaN, ±inf and ``T ≤ 0`` included).
+
+    Also returns the column each quadratic came from (the end ones first: their joint is
+    the column modulo the joint count; then one per resultant root: its column of
+    :func:`_interior_columns`, ``kind·joints + joint``). Root ``k`` and ``k + count``
+    come from quadratic ``k``. The ends' quadratics are :data:`_END_TABLES`' products
+    with the inputs; at a root τ of a resultant, ``P(τ, T)``'s coefficients are a
+    product of :data:`_COEFFICIENT_TABLES` with the inputs, evaluated at τ.
+    """
+    inputs = np.array([acceleration, velocity, displacement, max_velocity, max_acceleration])
+    columns = _interior_columns(profile, displacement, velocity, acceleration, max_velocity,
+                                max_acceleration)
+    if profile == 'cubic':  # quadratics in τ (velocity only): closed form
+        taus, owners = quadratic_roots_in_unit_interval(columns[:3, :2 * displacement.size].T)
+    else:
+        taus, owners = column_roots(columns)
+    ends = _END_TABLES[profile] @ inputs  # (3 powers · ends, joints)
+    count = ends.size // 3
+    quadratics = np.empty((3, count + taus.size))
+    quadratics[:, :count] = ends.reshape(3, -1)
+    # P's coefficients as polynomials in τ, (3 powers, 6 degrees, 4·joints columns).
+    shapes = (_COEFFICIENT_TABLES[profile] @ inputs).reshape(3, 6, -1)
+    np.einsum('pdr,dr->pr', shapes[:, :, owners], taus ** _POWERS, out=quadratics[:, count:])
+    return _positive_roots(*quadratics).reshape(-1), owners
+
+
 def candidates(profile: str, displacement: np.ndarray, velocity: np.ndarray,
                acceleration: np.ndarray, max_velocity: np.ndarray, max_acceleration: np.ndarray,
                shortest: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -222,24 +279,14 @@ def candidates(profile: str, displacement: np.ndarray, velocity: np.ndarray,
     Every duration above ``shortest`` where a joint's peak can equal its limit, and its joint.
 
     Each is a positive root of a quadratic in ``T``: ``P(τ, T)`` at the ends (τ = 0, 1,
-    from :data:`_END_TABLES`) or at a root τ of a resultant, all solved at once.
+    from :data:`_END_TABLES`) or at a root τ of a resultant, all solved at once
+    (:func:`durations`).
     """
     joints = displacement.size
-    inputs = np.array([acceleration, velocity, displacement, max_velocity, max_acceleration])
-    ends = (_END_TABLES[profile] @ inputs).reshape(3, -1)  # T², T, 1 rows
-    # Interior extrema: roots in τ of the resultants, then P(τ, T) = 0 for T.
-    columns = _interior_columns(profile, *inputs[[2, 1, 0, 3, 4]])
-    if profile == 'cubic':  # quadratics in τ (velocity only): closed form
-        taus, owners = quadratic_roots_in_unit_interval(columns[:3, :2 * joints].T)
-    else:
-        taus, owners = column_roots(columns)
-    kind, joint = np.divmod(owners, joints)  # kind: 2·order + sign
-    tables = (_VALUE_TABLES[profile] @ taus ** _POWERS).reshape(4, 15, -1)
-    at_root = tables[kind, :, np.arange(kind.size)].reshape(-1, 3, 5)  # (roots, 3, 5)
-    interior = np.einsum('rpi,ir->pr', at_root, inputs[:, joint])
-    quadratics = np.concatenate([ends, interior], axis=1)
-    durations = _positive_roots(*quadratics).reshape(-1)
-    owners = np.concatenate([np.arange(ends.shape[1]) % joints, joint])
+    found, columns = durations(profile, displacement, velocity, acceleration, max_velocity,
+                               max_acceleration)
+    ends = found.size // 2 - columns.size
+    owners = np.concatenate([np.arange(ends) % joints, columns % joints])
     owners = np.concatenate([owners, owners])
-    keep = (durations > shortest) & (durations < np.inf)
-    return durations[keep], owners[keep]
+    keep = (found > shortest) & (found < np.inf)
+    return found[keep], owners[keep]
