@@ -34,7 +34,7 @@ def _unit_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> np.ndarray:
     half = -0.5 * (c1 + np.copysign(np.sqrt(np.abs(delta)), c1))
     # No real root (or half = 0, then c1 = c0 = 0 or none): both divisions are skipped.
     real = (delta >= 0.0) & (half != 0.0)
-    roots = np.zeros((2, c0.size))
+    roots = np.zeros((2,) + c0.shape)
     np.divide(half, c2, out=roots[0], where=real & (c2 != 0.0))
     np.divide(c0, half, out=roots[1], where=real)
     return np.minimum(np.maximum(roots, 0.0), 1.0)
@@ -42,7 +42,12 @@ def _unit_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> np.ndarray:
 
 def peaks(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
           start_acceleration: np.ndarray, duration: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Return the peak ``|v|`` and ``|a|`` of each move (flat arrays, ``duration > 0``)."""
+    """
+    Return the peak ``|v|`` and ``|a|`` of each move (``duration > 0``).
+
+    The arrays broadcast together: flat ones give one move per entry, a column of moves
+    and a row of durations every move at every duration.
+    """
     inverse = 1.0 / duration
     alpha = start_velocity
     if profile == 'cubic':
@@ -59,11 +64,11 @@ def peaks(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
     gamma = 30.0 * displacement * inverse - 15.0 * alpha - 2.5 * e0
     e1, e2 = 2.0 * gamma - 3.0 * beta, -4.0 * gamma
     # Extrema of v (roots of E) and of a (roots of (1 - τ)E's derivative), both at once.
-    quadratics = np.empty((3, 2, alpha.size))
+    quadratics = np.empty((3, 2) + e2.shape)
     quadratics[0, 0], quadratics[1, 0], quadratics[2, 0] = e0, e1, e2
     quadratics[0, 1], quadratics[1, 1], quadratics[2, 1] = e1 - e0, 2.0 * (e2 - e1), -3.0 * e2
-    points = np.zeros((5, alpha.size))  # the last row: τ = 0, where v = α and a = e0/T
-    points[:4] = _unit_roots(*quadratics.reshape(3, -1)).reshape(4, -1)
+    points = np.zeros((5,) + e2.shape)  # the last row: τ = 0, where v = α and a = e0/T
+    points[:4] = _unit_roots(*quadratics).reshape(points[:4].shape)
     rest = 1.0 - points
     w = alpha + points * (beta + points * gamma)
     e = e0 + points * (e1 + points * e2)
