@@ -155,11 +155,15 @@ def _positive_roots(p2: np.ndarray, p1: np.ndarray, p0: np.ndarray) -> np.ndarra
     double root; complex pairs and divisions by zero give NaN or ±inf, which the caller
     drops with the negative roots.
     """
-    delta, p0, p1, p2 = discriminant(p0, p1, p2)  # rescaled where it would overflow
-    half = -0.5 * (p1 + np.copysign(np.sqrt(np.maximum(delta, 0.0)), p1))
-    half[delta < -1e-12 * (p1 * p1 + np.abs(4.0 * p2 * p0))] = np.nan  # complex pair
-    roots = np.empty((2, half.size))
-    with np.errstate(divide='ignore', invalid='ignore'):
+    with np.errstate(over='ignore', invalid='ignore', divide='ignore'):
+        square, product = p1 * p1, 4.0 * p2 * p0
+        delta = square - product
+        if np.count_nonzero(np.isfinite(delta)) != delta.size:  # rescaled where it overflows
+            delta, p0, p1, p2 = discriminant(p0, p1, p2)
+            square, product = p1 * p1, 4.0 * p2 * p0
+        half = -0.5 * (p1 + np.copysign(np.sqrt(np.maximum(delta, 0.0)), p1))
+        half[delta < -1e-12 * (square + np.abs(product))] = np.nan  # complex pair
+        roots = np.empty((2, half.size))
         np.divide(half, p2, out=roots[0])
         np.divide(p0, half, out=roots[1])
     return roots

@@ -220,9 +220,11 @@ def _newton(pair: np.ndarray, starts: np.ndarray, widths: np.ndarray | float,
     """
     size = pair.shape[1]
     # Start where the control polygon (the Bernstein coefficients at k/(size - 1)) crosses
-    # zero: its one sign change, between coefficients k and k + 1.
+    # zero: its one sign change, between coefficients k and k + 1, where k + 1 is the
+    # number of coefficients with the first one's sign.
     positive = bernstein > 0.0
-    change = np.argmax(positive[1:] != positive[:-1], axis=0)
+    change = np.add.reduce(positive)
+    change = np.where(positive[0], change - 1, size - 1 - change)
     columns = np.arange(change.size)
     before, after = bernstein[change, columns], bernstein[change + 1, columns]
     point = starts + widths * (change + before / (before - after)) / (size - 1)
