@@ -207,33 +207,31 @@ def _monomials(profile: str, displacement: np.ndarray, velocity: np.ndarray,
 
     Degenerate inputs take their own resultant (a0 = 0 or D = 0: ``P`` loses a power of
     ``T``); where none is defined the peak does not depend on ``T`` and the row is zero.
+    Without a degenerate joint (the usual case) the degenerate rows are zero.
     """
-    has_d, has_a0 = displacement != 0.0, acceleration != 0.0
     if profile == 'cubic':
-        return np.array([velocity, max_velocity]) * has_d
+        return np.array([velocity, max_velocity]) * (displacement != 0.0)
     v0_squared = velocity * velocity
     a_d = acceleration * displacement
-    products = np.array([
-        v0_squared, max_velocity * velocity, a_d, max_velocity * max_velocity,  # general
+    general = [v0_squared, max_velocity * velocity, a_d, max_velocity * max_velocity,
+               v0_squared * acceleration, max_acceleration * v0_squared, a_d * acceleration,
+               max_acceleration * a_d, max_acceleration * max_acceleration * displacement]
+    if np.count_nonzero(a_d) == a_d.size:  # no degenerate joint: the general rows only
+        zero = np.zeros_like(a_d)
+        return np.array(general[:4] + [zero] * 4 + general[4:] + [zero] * 2)
+    has_d, has_a0 = displacement != 0.0, acceleration != 0.0
+    products = np.array(general[:4] + [
         velocity, max_velocity,  # a0 = 0
-        velocity, max_velocity,  # D = 0
-        v0_squared * acceleration, max_acceleration * v0_squared, a_d * acceleration,
-        max_acceleration * a_d, max_acceleration * max_acceleration * displacement,
+        velocity, max_velocity] + general[4:] + [  # D = 0
         acceleration, max_acceleration])  # D = 0 (acceleration)
-    if has_d.all() and has_a0.all():  # no degenerate joint: the general rows only
-        return products * _GENERAL_ROWS
-    general = has_d & has_a0
+    both = has_d & has_a0
     no_d = ~has_d & has_a0
     no_a0 = has_d & ~has_a0
     no_d_acceleration = ~has_d & (velocity != 0.0)
     every = np.ones_like(has_d)
-    return products * np.array([general, general, general, general, no_a0, no_a0, no_d, no_d,
+    return products * np.array([both, both, both, both, no_a0, no_a0, no_d, no_d,
                                 has_d, has_d, every, every, every, no_d_acceleration,
                                 no_d_acceleration])
-
-
-# Which of the 15 quintic monomial rows apply when no joint is degenerate.
-_GENERAL_ROWS = np.array([1.0] * 4 + [0.0] * 4 + [1.0] * 5 + [0.0] * 2)[:, None]
 
 
 def _interior_columns(profile: str, *moves: np.ndarray) -> np.ndarray:
