@@ -316,16 +316,18 @@ def _moving_min_time(
     """
     if profile == 'lspb':
         return _moving_lspb(start, goal, max_velocity, max_acceleration, start_velocity)
-    max_velocity = np.maximum(max_velocity, np.abs(start_velocity))
+    speed = np.abs(start_velocity)
+    max_velocity = np.maximum(max_velocity, speed)
     if profile == 'quintic':
-        max_acceleration = np.maximum(max_acceleration, np.abs(start_acceleration))
+        magnitude = np.abs(start_acceleration)
+        max_acceleration = np.maximum(max_acceleration, magnitude)
     else:
-        start_acceleration = np.zeros_like(start_velocity)
+        start_acceleration = magnitude = np.zeros_like(start_velocity)
     # Start terms far below their limits (1e-12) only blur the candidate polynomials' degree.
     duration, hopeless = minimum_duration(
         profile, goal - start,
-        start_velocity * (np.abs(start_velocity) >= 1e-12 * max_velocity),
-        start_acceleration * (np.abs(start_acceleration) >= 1e-12 * max_acceleration),
+        start_velocity * (speed >= 1e-12 * max_velocity),
+        start_acceleration * (magnitude >= 1e-12 * max_acceleration),
         max_velocity, max_acceleration)
     if hopeless is not None:
         raise JointError(
