@@ -153,7 +153,15 @@ def per_joint_rows(like: np.ndarray | None = None, **values: ArrayLike) -> np.nd
 
     The joint count is the one the 1-D arrays agree on (or ``like.size``); scalars apply
     to every joint. One finiteness check covers all rows; a failure names the argument.
+    Per-joint arrays of one size, all finite (the usual call), are stacked in one step.
     """
+    try:
+        rows = np.array(list(values.values()), dtype=float)
+    except (TypeError, ValueError, OverflowError):  # the checks below say what is wrong
+        rows = None
+    if rows is not None and rows.ndim == 2 and rows.shape[1] and \
+            (like is None or like.size == rows.shape[1]) and every(np.isfinite(rows)):
+        return rows
     arrays = []
     sizes = set() if like is None else {like.size}
     for name, value in values.items():
