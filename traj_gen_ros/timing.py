@@ -19,6 +19,7 @@ stretched by one factor, found by bisection on exact peaks (:func:`shortest_dura
 from __future__ import annotations
 
 from collections.abc import Callable
+import math
 
 import numpy as np
 from traj_gen_ros import second_order, validation
@@ -136,7 +137,7 @@ def require_finite(plan: Trajectory | None, rows: np.ndarray) -> Trajectory:
     ``rows`` are the validated inputs ``(q0, qf, v0, a0, v_max, a_max)``; the message names
     the joint whose numbers overflowed (or the one with the longest move) and its inputs.
     """
-    if plan is not None and np.isfinite(plan.duration) and \
+    if plan is not None and math.isfinite(plan.duration) and \
             validation.every(np.isfinite(plan.coefficients)):
         return plan
     start, goal, start_velocity, start_acceleration, max_velocity, max_acceleration = rows
