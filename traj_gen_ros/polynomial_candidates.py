@@ -211,14 +211,19 @@ def _monomials(profile: str, displacement: np.ndarray, velocity: np.ndarray,
     """
     if profile == 'cubic':
         return np.array([velocity, max_velocity]) * (displacement != 0.0)
-    v0_squared = velocity * velocity
-    a_d = acceleration * displacement
-    general = [v0_squared, max_velocity * velocity, a_d, max_velocity * max_velocity,
-               v0_squared * acceleration, max_acceleration * v0_squared, a_d * acceleration,
-               max_acceleration * a_d, max_acceleration * max_acceleration * displacement]
+    rows = np.zeros((15, displacement.size))
+    v0_squared = np.multiply(velocity, velocity, out=rows[0])
+    np.multiply(max_velocity, velocity, out=rows[1])
+    a_d = np.multiply(acceleration, displacement, out=rows[2])
+    np.multiply(max_velocity, max_velocity, out=rows[3])
+    np.multiply(v0_squared, acceleration, out=rows[8])
+    np.multiply(max_acceleration, v0_squared, out=rows[9])
+    np.multiply(a_d, acceleration, out=rows[10])
+    np.multiply(max_acceleration, a_d, out=rows[11])
+    np.multiply(max_acceleration * max_acceleration, displacement, out=rows[12])
     if np.count_nonzero(a_d) == a_d.size:  # no degenerate joint: the general rows only
-        zero = np.zeros_like(a_d)
-        return np.array(general[:4] + [zero] * 4 + general[4:] + [zero] * 2)
+        return rows
+    general = list(rows[:4]) + list(rows[8:13])
     has_d, has_a0 = displacement != 0.0, acceleration != 0.0
     products = np.array(general[:4] + [
         velocity, max_velocity,  # a0 = 0
@@ -244,6 +249,10 @@ def _interior_polynomials(profile: str, *moves: np.ndarray) -> np.ndarray:
     return _interior_columns(profile, *moves).reshape(10, 2, 2, -1).transpose(1, 2, 3, 0)
 
 
+_INPUT_TABLES = {profile: np.concatenate([_END_TABLES[profile], _COEFFICIENT_TABLES[profile]])
+                 for profile in _SHAPES}
+
+
 def durations(profile: str, displacement: np.ndarray, velocity: np.ndarray,
               acceleration: np.ndarray, max_velocity: np.ndarray,
               max_acceleration: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -264,12 +273,14 @@ def durations(profile: str, displacement: np.ndarray, velocity: np.ndarray,
         taus, owners = quadratic_roots_in_unit_interval(columns[:3, :2 * displacement.size].T)
     else:
         taus, owners = column_roots(columns)
-    ends = _END_TABLES[profile] @ inputs  # (3 powers · ends, joints)
+    # The ends' quadratics (3 powers · ends, joints), then P's coefficients as polynomials
+    # in τ (3 powers, 6 degrees, 4·joints columns): one product.
+    products = _INPUT_TABLES[profile] @ inputs
+    ends = products[:-72]
     count = ends.size // 3
     quadratics = np.empty((3, count + taus.size))
     quadratics[:, :count] = ends.reshape(3, -1)
-    # P's coefficients as polynomials in τ, (3 powers, 6 degrees, 4·joints columns).
-    shapes = (_COEFFICIENT_TABLES[profile] @ inputs).reshape(3, 6, -1)
+    shapes = products[-72:].reshape(3, 6, -1)
     np.einsum('pdr,dr->pr', shapes[:, :, owners], taus ** _POWERS, out=quadratics[:, count:])
     return _positive_roots(*quadratics).reshape(-1), owners
 
