@@ -60,14 +60,14 @@ def peaks(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
         peak_acceleration = np.maximum(np.abs(beta - alpha), np.abs(beta + alpha)) * inverse
         return peak_velocity, peak_acceleration
     e0 = start_acceleration * duration  # = β - 2α
-    beta = 2.0 * alpha + e0
-    gamma = 30.0 * displacement * inverse - 15.0 * alpha - 2.5 * e0
-    e1, e2 = 2.0 * gamma - 3.0 * beta, -4.0 * gamma
     # Coefficients (ascending) of w, of E (whose roots are v's extrema) and of
-    # (1 - τ)E's derivative (whose roots are a's extrema).
-    table = np.empty((3, 3) + e2.shape)
-    table[0, 0], table[1, 0], table[2, 0] = alpha, beta, gamma
-    table[0, 1], table[1, 1], table[2, 1] = e0, e1, e2
+    # (1 - τ)E's derivative (whose roots are a's extrema), computed in place.
+    gamma = 30.0 * displacement * inverse - 15.0 * alpha - 2.5 * e0  # every input's shape
+    table = np.empty((3, 3) + gamma.shape)
+    table[0, 0], table[2, 0], table[0, 1] = alpha, gamma, e0
+    beta = np.add(2.0 * alpha, e0, out=table[1, 0])
+    e1 = np.subtract(2.0 * gamma, 3.0 * beta, out=table[1, 1])
+    e2 = np.multiply(gamma, -4.0, out=table[2, 1])
     np.subtract(e1, e0, out=table[0, 2])
     table[1, 2] = 2.0 * (e2 - e1)
     np.multiply(e2, -3.0, out=table[2, 2])

@@ -229,14 +229,18 @@ def _newton(pair: np.ndarray, starts: np.ndarray, widths: np.ndarray | float,
     before, after = bernstein[change, columns], bernstein[change + 1, columns]
     point = starts + widths * (change + before / (before - after)) / (size - 1)
     powers = _ORDERS[:size, None]
+    converged = False
     for step_count in range(_NEWTON_STEPS):
         both = np.einsum('jkn,kn->jn', pair, point ** powers)
         step = both[0] / both[1]
         point -= step
         if step_count and np.maximum.reduce(np.abs(step), initial=0.0) <= _LAST_STEP:
+            converged = True
             break
     ends = starts + widths
-    settled = (point >= starts) & (point <= ends) & (np.abs(step) <= _LAST_STEP)
+    settled = (point >= starts) & (point <= ends)
+    if not converged:
+        settled &= np.abs(step) <= _LAST_STEP
     if not settled.all():
         again = (~settled).nonzero()[0]
         point[again] = _safeguarded(pair[0, :, again], pair[1, :-1, again], starts[again],
