@@ -259,12 +259,12 @@ def durations(profile: str, displacement: np.ndarray, velocity: np.ndarray,
     """
     Every root of the quadratics in ``T`` (flat; NaN, ±inf and ``T ≤ 0`` included).
 
-    Also returns the column each quadratic came from (the end ones first: their joint is
-    the column modulo the joint count; then one per resultant root: its column of
-    :func:`_interior_columns`, ``kind·joints + joint``). Root ``k`` and ``k + count``
-    come from quadratic ``k``. The ends' quadratics are :data:`_END_TABLES`' products
-    with the inputs; at a root τ of a resultant, ``P(τ, T)``'s coefficients are a
-    product of :data:`_COEFFICIENT_TABLES` with the inputs, evaluated at τ.
+    The ends' quadratics come first (quadratic ``k``'s joint is ``k`` modulo the joint
+    count), then one per resultant root, whose column of :func:`_interior_columns`
+    (``kind·joints + joint``) is returned too. Roots ``k`` and ``k + count`` come from
+    quadratic ``k``. The ends' quadratics are :data:`_END_TABLES`' products with the
+    inputs; at a root τ of a resultant, ``P(τ, T)``'s coefficients are a product of
+    :data:`_COEFFICIENT_TABLES` with the inputs, evaluated at τ.
     """
     inputs = np.array([acceleration, velocity, displacement, max_velocity, max_acceleration])
     columns = _interior_columns(profile, displacement, velocity, acceleration, max_velocity,

@@ -202,8 +202,9 @@ def _smallest_common_duration(profile: str, moves: tuple, bound: float) -> float
     Every joint's feasibility is constant between consecutive candidates of all joints, so
     the answer is the first candidate where every joint is feasible, at the candidate or
     (rounding can leave a run's exact start a hair outside) in the gap after it; there
-    the start is moved onto the run (:func:`_onto_common_run`). Each joint is checked at
-    every candidate and gap: ``joints × 2 × candidates`` exact peaks in one call.
+    the start is moved onto the run (:func:`_onto_common_run`). Every joint is checked at
+    :data:`_FIRST_POINTS` candidates and their gaps at a time (the first chunk usually
+    holds the answer): ``joints × 2 × points`` exact peaks in one broadcast call.
     """
     # Plans may use half of LIMIT_TOLERANCE: a feasible start can lie that far below.
     bound = max(bound * (1.0 - 1e-9), SHORTEST_POLYNOMIAL)
