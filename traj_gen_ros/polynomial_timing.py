@@ -217,8 +217,9 @@ def _smallest_common_duration(profile: str, moves: tuple, bound: float) -> float
         points[0] = bound
     else:
         points = np.concatenate([[bound], points[:finite]])
-    distinct = np.ones(points.size, dtype=bool)  # joints alike share candidates
-    distinct[1:] = points[1:] != points[:-1]
+    distinct = np.empty(points.size, dtype=bool)  # joints alike share candidates
+    distinct[0] = True
+    np.not_equal(points[1:], points[:-1], out=distinct[1:])
     points = points[distinct]
     # The answer is usually among the first few points: those first, then the rest.
     for start in range(0, points.size, _FIRST_POINTS):
@@ -237,8 +238,8 @@ def _smallest_common_duration(profile: str, moves: tuple, bound: float) -> float
             times[-1] = 2.0 * chunk[-1]
         together = _all_feasible(profile, moves, times)
         either = together[:count] | together[count:]
-        if either.any():
-            first = int(either.argmax())
+        first = int(either.argmax())
+        if either[first]:
             if together[first]:
                 return float(chunk[first])
             return _onto_common_run(profile, moves, float(chunk[first]),

@@ -143,7 +143,8 @@ def column_roots(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # Every piece that may hold a root is split into eighths (one product) and classified;
     # unresolved parts are split once more. Pending parts: owner row, start, coefficients.
     pending = _may_hold_roots(coefficients)
-    owners, starts = pending % count, (pending // count) / _PIECES
+    starts, owners = np.divmod(pending, count)
+    starts = starts / _PIECES
     coefficients = coefficients[:, pending]
     found: list[tuple] = []  # parts with one root: (owners, starts, widths, coefficients)
     for level in range(1, _LEVELS + 1):
