@@ -133,12 +133,13 @@ def column_roots(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`roots_in_unit_interval` of polynomials stored as columns, ``(size, count)``."""
     size = polynomials.shape[0]
     scale = np.maximum.reduce(np.abs(polynomials))
-    nonzero = scale.nonzero()[0]
-    if nonzero.size == scale.size:  # usually: no row to leave out
+    count = np.count_nonzero(scale)
+    if count == scale.size:  # usually: no row to leave out
+        nonzero = None
         normalised = polynomials / scale
     else:
+        nonzero = scale.nonzero()[0]
         normalised = polynomials[:, nonzero] / scale[nonzero]
-    count = nonzero.size
     coefficients = (_by_columns(size, 'pieces') @ normalised).reshape(size, -1)
     # Every piece that may hold a root is split into eighths (one product) and classified;
     # unresolved parts are split once more. Pending parts: owner row, start, coefficients.
@@ -166,13 +167,13 @@ def column_roots(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                                    zip(*((a, b, d) for a, b, _, d in found), strict=True))
         widths = np.concatenate([np.full(part[0].size, part[2]) for part in found])
     roots = _newton(_with_slopes(normalised)[:, :, roots_of], at, widths, bernstein)
-    if not owners.size:
-        return roots, nonzero[roots_of]
-    hard = np.bincount(owners, minlength=count).nonzero()[0]
-    easy = np.bincount(hard, minlength=count)[roots_of] == 0
-    hard_roots, hard_rows = _eigenvalue_roots(normalised[:, hard].T)
-    return (np.concatenate([roots[easy], hard_roots]),
-            nonzero[np.concatenate([roots_of[easy], hard[hard_rows]])])
+    if owners.size:
+        hard = np.bincount(owners, minlength=count).nonzero()[0]
+        easy = np.bincount(hard, minlength=count)[roots_of] == 0
+        hard_roots, hard_rows = _eigenvalue_roots(normalised[:, hard].T)
+        roots = np.concatenate([roots[easy], hard_roots])
+        roots_of = np.concatenate([roots_of[easy], hard[hard_rows]])
+    return roots, roots_of if nonzero is None else nonzero[roots_of]
 
 
 def _with_slopes(columns: np.ndarray) -> np.ndarray:
