@@ -110,16 +110,18 @@ def _plan(profile: str, start: np.ndarray, goal: np.ndarray, start_velocity: np.
           start_acceleration: np.ndarray, max_velocity: np.ndarray,
           max_acceleration: np.ndarray) -> Trajectory | None:
     """Dispatch :func:`min_time` on validated ``(joints,)`` rows; ``None`` if it overflows."""
-    if profile != 'quintic':  # only the quintic starts from an acceleration
-        start_acceleration = np.zeros_like(start_acceleration)
-    if np.count_nonzero(start_velocity) or np.count_nonzero(start_acceleration):
+    # Only the quintic starts from an acceleration.
+    if np.count_nonzero(start_velocity) or \
+            (profile == 'quintic' and np.count_nonzero(start_acceleration)):
+        if profile != 'quintic':
+            start_acceleration = np.zeros_like(start_acceleration)
         return _moving_min_time(
             start, goal, max_velocity, max_acceleration, profile, start_velocity,
             start_acceleration)
     displacement = goal - start
-    distance = np.abs(displacement)
     if profile == 'lspb':
         return _min_time_lspb(start, goal, displacement, max_velocity, max_acceleration)
+    distance = np.abs(displacement)
     joint_times = rest_to_rest_times(distance, max_velocity, max_acceleration, profile)
     duration = float(joint_times.max())
     if duration == 0.0:
