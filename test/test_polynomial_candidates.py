@@ -13,7 +13,14 @@ import numpy.polynomial.polynomial as poly
 import pytest
 from traj_gen_ros import cubic, quintic
 from traj_gen_ros.move_peaks import peaks
-from traj_gen_ros.polynomial_candidates import _interior_polynomials, candidates
+from traj_gen_ros.polynomial_candidates import (
+    _end_table,
+    _END_TABLES,
+    _interior_polynomials,
+    _positive_roots,
+    _SHAPES,
+    candidates,
+)
 from traj_gen_ros.polynomial_timing import (
     _common_duration,
     _onto_common_run,
@@ -218,3 +225,36 @@ def test_trajectory_peaks_with_a_tiny_cubic_term_in_the_slope():
         plan = quintic([0.0], [1.0 + ratio], 1.0, v0=[0.3], a0=[-5.0])
         expected = helpers.reference_peaks(plan)
         np.testing.assert_allclose(plan.peaks()[0], expected[0], rtol=1e-9)
+
+
+@pytest.mark.parametrize('profile', ['cubic', 'quintic'])
+def test_end_quadratics_left_out_give_no_duration(profile):
+    """Every end condition and sign gives the same positive durations as the kept ones."""
+    rng = np.random.default_rng(31)
+    full = _end_table(_SHAPES[profile])
+    for case in range(200):
+        moves = random_moves(rng, profile, 4)
+        if case % 3 == 1:  # starts at a limit: the ends' T terms cancel
+            moves = (moves[0], np.copysign(moves[3], moves[1]), moves[2], moves[3], moves[4])
+        elif case % 3 == 2 and profile == 'quintic':
+            moves = (moves[0], moves[1], np.copysign(moves[4], moves[2]), moves[3], moves[4])
+        inputs = np.array([moves[2], moves[1], moves[0], moves[3], moves[4]])
+        found = []
+        for table in (full, _END_TABLES[profile]):
+            roots = _positive_roots(*np.einsum('ri,ij->rj', table, inputs).reshape(3, -1))
+            found.append(np.unique(roots[(roots > 0.0) & (roots < np.inf)]))
+        np.testing.assert_array_equal(found[0], found[1])
+    assert _END_TABLES[profile].shape[0] < full.shape[0]
+
+
+@pytest.mark.parametrize('profile', ['cubic', 'quintic'])
+def test_peaks_of_every_move_at_every_duration_by_broadcasting(profile):
+    rng = np.random.default_rng(32)
+    d, v, a = rng.normal(size=(3, 5))
+    d[0], v[1], a[2] = 0.0, 0.0, 0.0
+    durations = 10.0 ** rng.uniform(-1, 1, 7)
+    grid = peaks(profile, d[:, None], v[:, None], a[:, None], durations)
+    flat = peaks(profile, d.repeat(7), v.repeat(7), a.repeat(7), np.tile(durations, 5))
+    for by_grid, by_move in zip(grid, flat, strict=True):
+        assert by_grid.shape == (5, 7)
+        np.testing.assert_array_equal(by_grid.reshape(-1), by_move)

@@ -82,6 +82,22 @@ def test_non_finite_per_joint_inputs_name_argument_and_joint(bad):
 
 
 @pytest.mark.parametrize('bad', [NAN, INF])
+def test_non_finite_entry_of_numpy_array_inputs_names_argument_and_joint(bad):
+    """All inputs numpy arrays of one shape (stacked in one step when finite)."""
+    start, goal, limit = np.zeros(2), np.array([1.0, 2.0]), np.ones(2)
+    refused(lambda: min_time(start, goal, limit, limit, 'quintic', v0=np.array([0.0, bad]),
+                             a0=np.zeros(2)), 'v0', 'joint 1')
+    refused(lambda: min_time(start, goal, np.array([bad, 1.0]), limit, 'cubic', v0=limit,
+                             a0=start), 'max_velocity', 'joint 0')
+    refused(lambda: min_time(start, goal, limit, limit, v0=np.zeros(3), a0=start),
+            'v0', '3')
+    plan = min_time(start, goal, limit, limit, 'quintic', v0=np.array([0.5, 0]),
+                    a0=np.array([0, 1]))
+    same = min_time(list(start), list(goal), 1.0, 1.0, 'quintic', v0=[0.5, 0.0], a0=[0.0, 1.0])
+    assert plan.duration == same.duration
+
+
+@pytest.mark.parametrize('bad', [NAN, INF])
 def test_non_finite_duration_or_acceleration_is_refused(bad):
     refused(lambda: cubic(0.0, 1.0, bad), 'duration', 'finite')
     refused(lambda: lspb(0.0, 1.0, 1.0, bad), 'acceleration', 'finite')

@@ -23,26 +23,31 @@ import numpy as np
 from traj_gen_ros.polynomial_peaks import discriminant
 
 
-def _unit_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> np.ndarray:
+def _unit_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray, roots: np.ndarray) -> None:
     """
-    Roots of ``c0 + c1 τ + c2 τ²`` clipped to ``[0, 1]``, ``(2, count)``; 0 where none.
+    Write the roots of ``c0 + c1 τ + c2 τ²`` clipped to ``[0, 1]`` into zeroed ``roots``.
 
-    A root outside ``[0, 1]`` clipped to an end only adds that end, which is checked
-    anyway; a missing root is replaced by ``τ = 0``, likewise harmless.
+    ``roots`` is ``(2,) + c0.shape``. A root outside ``[0, 1]`` clipped to an end only
+    adds that end, which is checked anyway; a missing root is left at ``τ = 0``, likewise
+    harmless.
     """
     delta, c0, c1, c2 = discriminant(c0, c1, c2)  # rescaled where it would overflow
     half = -0.5 * (c1 + np.copysign(np.sqrt(np.abs(delta)), c1))
     # No real root (or half = 0, then c1 = c0 = 0 or none): both divisions are skipped.
     real = (delta >= 0.0) & (half != 0.0)
-    roots = np.zeros((2, c0.size))
     np.divide(half, c2, out=roots[0], where=real & (c2 != 0.0))
     np.divide(c0, half, out=roots[1], where=real)
-    return np.minimum(np.maximum(roots, 0.0), 1.0)
+    np.minimum(np.maximum(roots, 0.0, out=roots), 1.0, out=roots)
 
 
 def peaks(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
           start_acceleration: np.ndarray, duration: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Return the peak ``|v|`` and ``|a|`` of each move (flat arrays, ``duration > 0``)."""
+    """
+    Return the peak ``|v|`` and ``|a|`` of each move (``duration > 0``).
+
+    The arrays broadcast together: flat ones give one move per entry, a column of moves
+    and a row of durations every move at every duration.
+    """
     inverse = 1.0 / duration
     alpha = start_velocity
     if profile == 'cubic':
@@ -55,17 +60,25 @@ def peaks(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
         peak_acceleration = np.maximum(np.abs(beta - alpha), np.abs(beta + alpha)) * inverse
         return peak_velocity, peak_acceleration
     e0 = start_acceleration * duration  # = β - 2α
-    beta = 2.0 * alpha + e0
-    gamma = 30.0 * displacement * inverse - 15.0 * alpha - 2.5 * e0
-    e1, e2 = 2.0 * gamma - 3.0 * beta, -4.0 * gamma
-    # Extrema of v (roots of E) and of a (roots of (1 - τ)E's derivative), both at once.
-    quadratics = np.empty((3, 2, alpha.size))
-    quadratics[0, 0], quadratics[1, 0], quadratics[2, 0] = e0, e1, e2
-    quadratics[0, 1], quadratics[1, 1], quadratics[2, 1] = e1 - e0, 2.0 * (e2 - e1), -3.0 * e2
-    points = np.zeros((5, alpha.size))  # the last row: τ = 0, where v = α and a = e0/T
-    points[:4] = _unit_roots(*quadratics.reshape(3, -1)).reshape(4, -1)
+    # Coefficients (ascending) of w, of E (whose roots are v's extrema) and of
+    # (1 - τ)E's derivative (whose roots are a's extrema), computed in place.
+    gamma = 30.0 * displacement * inverse - 15.0 * alpha - 2.5 * e0  # every input's shape
+    table = np.empty((3, 3) + gamma.shape)
+    table[0, 0], table[2, 0], table[0, 1] = alpha, gamma, e0
+    beta = np.add(2.0 * alpha, e0, out=table[1, 0])
+    e1 = np.subtract(2.0 * gamma, 3.0 * beta, out=table[1, 1])
+    e2 = np.multiply(gamma, -4.0, out=table[2, 1])
+    np.subtract(e1, e0, out=table[0, 2])
+    table[1, 2] = 2.0 * (e2 - e1)
+    np.multiply(e2, -3.0, out=table[2, 2])
+    # Each quadratic's two roots, then τ = 0 (where v = α and a = e0/T): v is checked at
+    # E's roots, a at the other's; τ = 1 gives v = a = 0.
+    points = np.zeros((3, 2) + e2.shape)
+    _unit_roots(*table[:, 1:], points[:2])
+    # w at E's roots and E at the others, times (1 - τ)² and (1 - τ): v and a T.
+    values = table[0, :2] + points * (table[1, :2] + points * table[2, :2])
     rest = 1.0 - points
-    w = alpha + points * (beta + points * gamma)
-    e = e0 + points * (e1 + points * e2)
-    return (np.maximum.reduce(np.abs(rest * rest * w)),
-            np.maximum.reduce(np.abs(rest * e)) * inverse)
+    values *= rest
+    values[:, 0] *= rest[:, 0]
+    peak = np.maximum.reduce(np.abs(values, out=values))
+    return peak[0], peak[1] * inverse

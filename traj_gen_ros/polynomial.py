@@ -92,15 +92,24 @@ def to_rest(profile: str, start: np.ndarray, goal: np.ndarray, duration: float,
     For inputs already validated (flat per-joint arrays, a valid duration), as the timing
     of a move from a moving state has them: the same plan without checking them again.
     """
-    zeros = np.zeros_like(start)
-    if profile == 'cubic':
-        matrix, exponents = CUBIC_MATRIX, _CUBIC_EXPONENTS
-        conditions = np.array([zeros, start_velocity, goal - start, zeros])
+    cubic_profile = profile == 'cubic'
+    matrix, exponents = (CUBIC_MATRIX, _CUBIC_EXPONENTS) if cubic_profile else \
+        (QUINTIC_MATRIX, _QUINTIC_EXPONENTS)
+    conditions = np.zeros((1, matrix.shape[1], start.size))
+    conditions[0, 1] = start_velocity
+    if cubic_profile:
+        np.subtract(goal, start, out=conditions[0, 2])
     else:
-        matrix, exponents = QUINTIC_MATRIX, _QUINTIC_EXPONENTS
-        conditions = np.array([zeros, start_velocity, start_acceleration, goal - start,
-                               zeros, zeros])
-    return _segments(matrix, exponents, start[None], conditions[None], np.array([duration]))
+        conditions[0, 2] = start_acceleration
+        np.subtract(goal, start, out=conditions[0, 3])
+    if not duration >= _SHORTEST_SEGMENT:  # let _segments say what is wrong
+        return _segments(matrix, exponents, start[None], conditions, np.array([duration]))
+    # _segments' product for one segment, without its array bookkeeping.
+    coefficients = (matrix * duration ** exponents) @ conditions
+    coefficients[:, 0] += start
+    if not validation.every(np.isfinite(coefficients)):
+        return _segments(matrix, exponents, start[None], conditions, np.array([duration]))
+    return Trajectory(np.array([0.0, duration]), coefficients)
 
 
 def cubic_via(
@@ -269,7 +278,7 @@ def _segments(
     does not move keeps exactly zero higher coefficients however short the segment.
     ``exponents[k, i] = order_i - k`` undoes the normalised-time scaling.
     """
-    if durations.min() < _SHORTEST_SEGMENT:
+    if np.count_nonzero(durations < _SHORTEST_SEGMENT):  # (cheaper than .min() on a few)
         raise ValueError(f'segment {int(np.argmin(durations))} lasts {durations.min():g} s: '
                          f'polynomial segments must last at least {_SHORTEST_SEGMENT:g} s')
     coefficients = (matrix * durations[:, None, None] ** exponents) @ boundary

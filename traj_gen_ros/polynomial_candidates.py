@@ -98,10 +98,29 @@ def _end_table(shapes: np.ndarray) -> np.ndarray:
     return table.reshape(-1, 5)
 
 
+def _useful_ends(table: np.ndarray) -> np.ndarray:
+    """
+    ``(3 powers · ends, 5 inputs)``: the end quadratics of ``table`` that can give a duration.
+
+    A quadratic with one power of ``T`` at most, for every input (``c Tᵏ = 0``), has no
+    root but ``T = 0``: the quintic's velocity and acceleration at both ends, and the
+    cubic's velocity there, are fixed (``v0``, ``a0``, rest), whatever ``T``, and so is
+    where the quintic's extrema enter (``∂P/∂τ = a0 T²`` or ``0`` at some ends). Those
+    are left out, and so are repeats (``∂P/∂τ`` does not depend on ``σ``).
+    """
+    quadratics = table.reshape(3, -1, 5).transpose(1, 0, 2)  # (ends, 3 powers, 5 inputs)
+    kept: list[np.ndarray] = []
+    for quadratic in quadratics:
+        if np.count_nonzero(quadratic.any(axis=1)) >= 2 and \
+                not any(np.array_equal(quadratic, other) for other in kept):
+            kept.append(quadratic)
+    return np.ascontiguousarray(np.array(kept).transpose(1, 0, 2).reshape(-1, 5))
+
+
 _LIMIT_POWER = (1, 0)  # the limit term multiplies T (velocity), T² (acceleration)
 _SIGNS = np.array([1.0, -1.0])  # σ
 _POWERS = np.arange(6.0)[:, None]
-_END_TABLES = {profile: _end_table(shapes) for profile, shapes in _SHAPES.items()}
+_END_TABLES = {profile: _useful_ends(_end_table(shapes)) for profile, shapes in _SHAPES.items()}
 
 
 def _value_table(shapes: np.ndarray) -> np.ndarray:
@@ -119,7 +138,12 @@ def _value_table(shapes: np.ndarray) -> np.ndarray:
     return table.reshape(-1, 6)
 
 
-_VALUE_TABLES = {profile: _value_table(shapes) for profile, shapes in _SHAPES.items()}
+# The same by power, degree in τ and kind (rows), so that one product with the inputs
+# gives every column's P(τ, T) as (3 powers, 6 degrees, 4·joints columns).
+_COEFFICIENT_TABLES = {
+    profile: np.ascontiguousarray(
+        _value_table(shapes).reshape(4, 3, 5, 6).transpose(1, 3, 0, 2).reshape(-1, 5))
+    for profile, shapes in _SHAPES.items()}
 
 
 def _positive_roots(p2: np.ndarray, p1: np.ndarray, p0: np.ndarray) -> np.ndarray:
@@ -131,11 +155,18 @@ def _positive_roots(p2: np.ndarray, p1: np.ndarray, p0: np.ndarray) -> np.ndarra
     double root; complex pairs and divisions by zero give NaN or ±inf, which the caller
     drops with the negative roots.
     """
-    delta, p0, p1, p2 = discriminant(p0, p1, p2)  # rescaled where it would overflow
-    half = -0.5 * (p1 + np.copysign(np.sqrt(np.maximum(delta, 0.0)), p1))
-    half[delta < -1e-12 * (p1 * p1 + np.abs(4.0 * p2 * p0))] = np.nan  # complex pair
-    with np.errstate(divide='ignore', invalid='ignore'):
-        return np.array([half / p2, p0 / half])
+    with np.errstate(over='ignore', invalid='ignore', divide='ignore'):
+        square, product = p1 * p1, 4.0 * p2 * p0
+        delta = square - product
+        if np.count_nonzero(np.isfinite(delta)) != delta.size:  # rescaled where it overflows
+            delta, p0, p1, p2 = discriminant(p0, p1, p2)
+            square, product = p1 * p1, 4.0 * p2 * p0
+        half = -0.5 * (p1 + np.copysign(np.sqrt(np.maximum(delta, 0.0)), p1))
+        half[delta < -1e-12 * (square + np.abs(product))] = np.nan  # complex pair
+        roots = np.empty((2, half.size))
+        np.divide(half, p2, out=roots[0])
+        np.divide(p0, half, out=roots[1])
+    return roots
 
 
 def _block_table(blocks: list[tuple[int, np.ndarray, list[int]]], rows: int) -> np.ndarray:
@@ -176,33 +207,36 @@ def _monomials(profile: str, displacement: np.ndarray, velocity: np.ndarray,
 
     Degenerate inputs take their own resultant (a0 = 0 or D = 0: ``P`` loses a power of
     ``T``); where none is defined the peak does not depend on ``T`` and the row is zero.
+    Without a degenerate joint (the usual case) the degenerate rows are zero.
     """
-    has_d, has_a0 = displacement != 0.0, acceleration != 0.0
     if profile == 'cubic':
-        return np.array([velocity, max_velocity]) * has_d
-    v0_squared = velocity * velocity
-    a_d = acceleration * displacement
-    products = np.array([
-        v0_squared, max_velocity * velocity, a_d, max_velocity * max_velocity,  # general
+        return np.array([velocity, max_velocity]) * (displacement != 0.0)
+    rows = np.zeros((15, displacement.size))
+    v0_squared = np.multiply(velocity, velocity, out=rows[0])
+    np.multiply(max_velocity, velocity, out=rows[1])
+    a_d = np.multiply(acceleration, displacement, out=rows[2])
+    np.multiply(max_velocity, max_velocity, out=rows[3])
+    np.multiply(v0_squared, acceleration, out=rows[8])
+    np.multiply(max_acceleration, v0_squared, out=rows[9])
+    np.multiply(a_d, acceleration, out=rows[10])
+    np.multiply(max_acceleration, a_d, out=rows[11])
+    np.multiply(max_acceleration * max_acceleration, displacement, out=rows[12])
+    if np.count_nonzero(a_d) == a_d.size:  # no degenerate joint: the general rows only
+        return rows
+    general = list(rows[:4]) + list(rows[8:13])
+    has_d, has_a0 = displacement != 0.0, acceleration != 0.0
+    products = np.array(general[:4] + [
         velocity, max_velocity,  # a0 = 0
-        velocity, max_velocity,  # D = 0
-        v0_squared * acceleration, max_acceleration * v0_squared, a_d * acceleration,
-        max_acceleration * a_d, max_acceleration * max_acceleration * displacement,
+        velocity, max_velocity] + general[4:] + [  # D = 0
         acceleration, max_acceleration])  # D = 0 (acceleration)
-    if has_d.all() and has_a0.all():  # no degenerate joint: the general rows only
-        return products * _GENERAL_ROWS
-    general = has_d & has_a0
+    both = has_d & has_a0
     no_d = ~has_d & has_a0
     no_a0 = has_d & ~has_a0
     no_d_acceleration = ~has_d & (velocity != 0.0)
     every = np.ones_like(has_d)
-    return products * np.array([general, general, general, general, no_a0, no_a0, no_d, no_d,
+    return products * np.array([both, both, both, both, no_a0, no_a0, no_d, no_d,
                                 has_d, has_d, every, every, every, no_d_acceleration,
                                 no_d_acceleration])
-
-
-# Which of the 15 quintic monomial rows apply when no joint is degenerate.
-_GENERAL_ROWS = np.array([1.0] * 4 + [0.0] * 4 + [1.0] * 5 + [0.0] * 2)[:, None]
 
 
 def _interior_columns(profile: str, *moves: np.ndarray) -> np.ndarray:
@@ -215,6 +249,42 @@ def _interior_polynomials(profile: str, *moves: np.ndarray) -> np.ndarray:
     return _interior_columns(profile, *moves).reshape(10, 2, 2, -1).transpose(1, 2, 3, 0)
 
 
+_INPUT_TABLES = {profile: np.concatenate([_END_TABLES[profile], _COEFFICIENT_TABLES[profile]])
+                 for profile in _SHAPES}
+
+
+def durations(profile: str, displacement: np.ndarray, velocity: np.ndarray,
+              acceleration: np.ndarray, max_velocity: np.ndarray,
+              max_acceleration: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Every root of the quadratics in ``T`` (flat; NaN, ±inf and ``T ≤ 0`` included).
+
+    The ends' quadratics come first (quadratic ``k``'s joint is ``k`` modulo the joint
+    count), then one per resultant root, whose column of :func:`_interior_columns`
+    (``kind·joints + joint``) is returned too. Roots ``k`` and ``k + count`` come from
+    quadratic ``k``. The ends' quadratics are :data:`_END_TABLES`' products with the
+    inputs; at a root τ of a resultant, ``P(τ, T)``'s coefficients are a product of
+    :data:`_COEFFICIENT_TABLES` with the inputs, evaluated at τ.
+    """
+    inputs = np.array([acceleration, velocity, displacement, max_velocity, max_acceleration])
+    columns = _interior_columns(profile, displacement, velocity, acceleration, max_velocity,
+                                max_acceleration)
+    if profile == 'cubic':  # quadratics in τ (velocity only): closed form
+        taus, owners = quadratic_roots_in_unit_interval(columns[:3, :2 * displacement.size].T)
+    else:
+        taus, owners = column_roots(columns)
+    # The ends' quadratics (3 powers · ends, joints), then P's coefficients as polynomials
+    # in τ (3 powers, 6 degrees, 4·joints columns): one product.
+    products = _INPUT_TABLES[profile] @ inputs
+    ends = products[:-72]
+    count = ends.size // 3
+    quadratics = np.empty((3, count + taus.size))
+    quadratics[:, :count] = ends.reshape(3, -1)
+    shapes = products[-72:].reshape(3, 6, -1)
+    np.einsum('pdr,dr->pr', shapes[:, :, owners], taus ** _POWERS, out=quadratics[:, count:])
+    return _positive_roots(*quadratics).reshape(-1), owners
+
+
 def candidates(profile: str, displacement: np.ndarray, velocity: np.ndarray,
                acceleration: np.ndarray, max_velocity: np.ndarray, max_acceleration: np.ndarray,
                shortest: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -222,24 +292,14 @@ def candidates(profile: str, displacement: np.ndarray, velocity: np.ndarray,
     Every duration above ``shortest`` where a joint's peak can equal its limit, and its joint.
 
     Each is a positive root of a quadratic in ``T``: ``P(τ, T)`` at the ends (τ = 0, 1,
-    from :data:`_END_TABLES`) or at a root τ of a resultant, all solved at once.
+    from :data:`_END_TABLES`) or at a root τ of a resultant, all solved at once
+    (:func:`durations`).
     """
     joints = displacement.size
-    inputs = np.array([acceleration, velocity, displacement, max_velocity, max_acceleration])
-    ends = (_END_TABLES[profile] @ inputs).reshape(3, -1)  # T², T, 1 rows
-    # Interior extrema: roots in τ of the resultants, then P(τ, T) = 0 for T.
-    columns = _interior_columns(profile, *inputs[[2, 1, 0, 3, 4]])
-    if profile == 'cubic':  # quadratics in τ (velocity only): closed form
-        taus, owners = quadratic_roots_in_unit_interval(columns[:3, :2 * joints].T)
-    else:
-        taus, owners = column_roots(columns)
-    kind, joint = np.divmod(owners, joints)  # kind: 2·order + sign
-    tables = (_VALUE_TABLES[profile] @ taus ** _POWERS).reshape(4, 15, -1)
-    at_root = tables[kind, :, np.arange(kind.size)].reshape(-1, 3, 5)  # (roots, 3, 5)
-    interior = np.einsum('rpi,ir->pr', at_root, inputs[:, joint])
-    quadratics = np.concatenate([ends, interior], axis=1)
-    durations = _positive_roots(*quadratics).reshape(-1)
-    owners = np.concatenate([np.arange(ends.shape[1]) % joints, joint])
+    found, columns = durations(profile, displacement, velocity, acceleration, max_velocity,
+                               max_acceleration)
+    ends = found.size // 2 - columns.size
+    owners = np.concatenate([np.arange(ends) % joints, columns % joints])
     owners = np.concatenate([owners, owners])
-    keep = (durations > shortest) & (durations < np.inf)
-    return durations[keep], owners[keep]
+    keep = (found > shortest) & (found < np.inf)
+    return found[keep], owners[keep]

@@ -24,7 +24,7 @@ import numpy as np
 from traj_gen_ros import second_order
 from traj_gen_ros.limits import LIMIT_TOLERANCE
 from traj_gen_ros.move_peaks import peaks
-from traj_gen_ros.polynomial_candidates import candidates
+from traj_gen_ros.polynomial_candidates import candidates, durations
 
 #: Shortest polynomial plan (s): shorter ones' coefficients ~ D/T⁵ overflow.
 SHORTEST_POLYNOMIAL = 1e-9
@@ -202,37 +202,60 @@ def _smallest_common_duration(profile: str, moves: tuple, bound: float) -> float
     Every joint's feasibility is constant between consecutive candidates of all joints, so
     the answer is the first candidate where every joint is feasible, at the candidate or
     (rounding can leave a run's exact start a hair outside) in the gap after it; there
-    the start is moved onto the run (:func:`_onto_common_run`). Each joint is checked at
-    every candidate and gap: ``joints × 2 × candidates`` exact peaks in one call.
+    the start is moved onto the run (:func:`_onto_common_run`). Every joint is checked at
+    :data:`_FIRST_POINTS` candidates and their gaps at a time (the first chunk usually
+    holds the answer): ``joints × 2 × points`` exact peaks in one broadcast call.
     """
-    joints = moves[0].size
     # Plans may use half of LIMIT_TOLERANCE: a feasible start can lie that far below.
     bound = max(bound * (1.0 - 1e-9), SHORTEST_POLYNOMIAL)
-    durations, _ = candidates(profile, *moves, shortest=bound)
-    points = np.sort(np.concatenate([durations, [bound]]))
-    distinct = np.ones(points.size, dtype=bool)  # joints alike share candidates
-    distinct[1:] = points[1:] != points[:-1]
+    # Every root, sorted (NaN last): the points are bound, then the finite ones above it.
+    points = np.sort(durations(profile, *moves)[0])
+    above = int(points.searchsorted(bound, 'right'))
+    finite = int(points.searchsorted(np.inf))
+    if above:  # the slot before the first point above bound holds bound
+        points = points[above - 1:finite]
+        points[0] = bound
+    else:
+        points = np.concatenate([[bound], points[:finite]])
+    distinct = np.empty(points.size, dtype=bool)  # joints alike share candidates
+    distinct[0] = True
+    np.not_equal(points[1:], points[:-1], out=distinct[1:])
     points = points[distinct]
-    gaps = np.empty_like(points)
-    gaps[:-1] = 0.5 * (points[:-1] + points[1:])
-    gaps[-1] = 2.0 * points[-1]
     # The answer is usually among the first few points: those first, then the rest.
-    for chunk in (slice(0, _FIRST_POINTS), slice(_FIRST_POINTS, None)):
-        times = np.concatenate([points[chunk], gaps[chunk]])
-        if not times.size:
-            break
-        feasible = _feasible(profile, moves, np.arange(joints).repeat(times.size),
-                             np.repeat(times[None], joints, axis=0).reshape(-1))
-        together = np.logical_and.reduce(feasible.reshape(joints, -1))
-        count = times.size // 2
+    for start in range(0, points.size, _FIRST_POINTS):
+        chunk = points[start:start + _FIRST_POINTS]
+        count = chunk.size
+        # The points, then one duration inside each gap after a point: the midpoint, or
+        # twice the last point.
+        times = np.empty(2 * count)
+        times[:count] = chunk
+        if start + count < points.size:
+            np.add(chunk, points[start + 1:start + count + 1], out=times[count:])
+            times[count:] *= 0.5
+        else:
+            np.add(chunk[:-1], chunk[1:], out=times[count:-1])
+            times[count:-1] *= 0.5
+            times[-1] = 2.0 * chunk[-1]
+        together = _all_feasible(profile, moves, times)
         either = together[:count] | together[count:]
-        if either.any():
-            first = int(np.argmax(either))
+        first = int(either.argmax())
+        if either[first]:
             if together[first]:
-                return float(points[chunk][first])
-            return _onto_common_run(profile, moves, float(points[chunk][first]),
-                                    float(gaps[chunk][first]))
+                return float(chunk[first])
+            return _onto_common_run(profile, moves, float(chunk[first]),
+                                    float(times[count + first]))
     return None
+
+
+def _all_feasible(profile: str, moves: tuple, times: np.ndarray) -> np.ndarray:
+    """Whether every joint stays within its limits in each of ``times`` (exact peaks)."""
+    displacement, velocity, acceleration, max_velocity, max_acceleration = moves
+    peak_velocity, peak_acceleration = peaks(
+        profile, displacement[:, None], velocity[:, None], acceleration[:, None], times)
+    slack = 1.0 + 0.5 * LIMIT_TOLERANCE
+    within = (peak_velocity <= max_velocity[:, None] * slack) & \
+        (peak_acceleration <= max_acceleration[:, None] * slack)
+    return np.logical_and.reduce(within)
 
 
 def _onto_common_run(profile: str, moves: tuple, outside: float, inside: float) -> float:

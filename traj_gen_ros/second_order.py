@@ -55,18 +55,19 @@ def minimum_times(
     ``T = (2 vp - s v0)/a``; with one (``vp > v_max``)
     ``T = (2 v_max - s v0)/a + (s D - (2 v_max² - v0²)/(2a))/v_max``.
     """
-    direction = np.where(2.0 * acceleration * displacement >= start_velocity
-                         * np.abs(start_velocity), 1.0, -1.0)
+    speed, twice = np.abs(start_velocity), 2.0 * acceleration
+    direction = np.where(twice * displacement >= start_velocity * speed, 1.0, -1.0)
     towards = direction * start_velocity
     reach = direction * displacement
-    peak = np.sqrt(np.maximum(acceleration * reach + 0.5 * start_velocity**2, 0.0))
+    squared = start_velocity**2
+    peak = np.sqrt(np.maximum(acceleration * reach + 0.5 * squared, 0.0))
     cruising = peak > max_velocity
-    capped = np.where(cruising, max_velocity, peak)
-    cruise = np.where(cruising, (reach - (2.0 * capped**2 - start_velocity**2)
-                                 / (2.0 * acceleration)) / max_velocity, 0.0)
+    times = (2.0 * np.minimum(peak, max_velocity) - towards) / acceleration
+    if np.count_nonzero(cruising):
+        cruise = (reach - (2.0 * max_velocity**2 - squared) / twice) / max_velocity
+        times += np.where(cruising, np.maximum(cruise, 0.0), 0.0)
     # Never shorter than braking alone (|v0|/a): it holds even where v0² underflows.
-    return np.maximum((2.0 * capped - towards) / acceleration + np.maximum(cruise, 0.0),
-                      np.abs(start_velocity) / acceleration)
+    return np.maximum(times, speed / acceleration)
 
 
 def displacement_at(

@@ -19,6 +19,7 @@ stretched by one factor, found by bisection on exact peaks (:func:`shortest_dura
 from __future__ import annotations
 
 from collections.abc import Callable
+import math
 
 import numpy as np
 from traj_gen_ros import second_order, validation
@@ -109,16 +110,18 @@ def _plan(profile: str, start: np.ndarray, goal: np.ndarray, start_velocity: np.
           start_acceleration: np.ndarray, max_velocity: np.ndarray,
           max_acceleration: np.ndarray) -> Trajectory | None:
     """Dispatch :func:`min_time` on validated ``(joints,)`` rows; ``None`` if it overflows."""
-    if profile != 'quintic':  # only the quintic starts from an acceleration
-        start_acceleration = np.zeros_like(start_acceleration)
-    if np.count_nonzero(start_velocity) or np.count_nonzero(start_acceleration):
+    # Only the quintic starts from an acceleration.
+    if np.count_nonzero(start_velocity) or \
+            (profile == 'quintic' and np.count_nonzero(start_acceleration)):
+        if profile != 'quintic':
+            start_acceleration = np.zeros_like(start_acceleration)
         return _moving_min_time(
             start, goal, max_velocity, max_acceleration, profile, start_velocity,
             start_acceleration)
     displacement = goal - start
-    distance = np.abs(displacement)
     if profile == 'lspb':
         return _min_time_lspb(start, goal, displacement, max_velocity, max_acceleration)
+    distance = np.abs(displacement)
     joint_times = rest_to_rest_times(distance, max_velocity, max_acceleration, profile)
     duration = float(joint_times.max())
     if duration == 0.0:
@@ -136,7 +139,7 @@ def require_finite(plan: Trajectory | None, rows: np.ndarray) -> Trajectory:
     ``rows`` are the validated inputs ``(q0, qf, v0, a0, v_max, a_max)``; the message names
     the joint whose numbers overflowed (or the one with the longest move) and its inputs.
     """
-    if plan is not None and np.isfinite(plan.duration) and \
+    if plan is not None and math.isfinite(plan.duration) and \
             validation.every(np.isfinite(plan.coefficients)):
         return plan
     start, goal, start_velocity, start_acceleration, max_velocity, max_acceleration = rows
@@ -316,16 +319,18 @@ def _moving_min_time(
     """
     if profile == 'lspb':
         return _moving_lspb(start, goal, max_velocity, max_acceleration, start_velocity)
-    max_velocity = np.maximum(max_velocity, np.abs(start_velocity))
+    speed = np.abs(start_velocity)
+    max_velocity = np.maximum(max_velocity, speed)
     if profile == 'quintic':
-        max_acceleration = np.maximum(max_acceleration, np.abs(start_acceleration))
+        magnitude = np.abs(start_acceleration)
+        max_acceleration = np.maximum(max_acceleration, magnitude)
     else:
-        start_acceleration = np.zeros_like(start_velocity)
+        start_acceleration = magnitude = np.zeros_like(start_velocity)
     # Start terms far below their limits (1e-12) only blur the candidate polynomials' degree.
     duration, hopeless = minimum_duration(
         profile, goal - start,
-        start_velocity * (np.abs(start_velocity) >= 1e-12 * max_velocity),
-        start_acceleration * (np.abs(start_acceleration) >= 1e-12 * max_acceleration),
+        start_velocity * (speed >= 1e-12 * max_velocity),
+        start_acceleration * (magnitude >= 1e-12 * max_acceleration),
         max_velocity, max_acceleration)
     if hopeless is not None:
         raise JointError(

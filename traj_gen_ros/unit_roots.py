@@ -113,12 +113,10 @@ def _classify(coefficients: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     with no coefficient within the margin and one sign change has exactly one; any other
     piece (more changes, or a coefficient within rounding of 0) is unresolved.
     """
-    maybe = _may_hold_roots(coefficients)
-    near = coefficients[:, maybe]
-    positive = near > _MARGIN
-    clear = np.logical_and.reduce(positive | (near < -_MARGIN))
-    single = clear & (np.add.reduce(positive[1:] != positive[:-1]) == 1)
-    return maybe[single], maybe[~single]
+    positive = coefficients > _MARGIN
+    clear = np.logical_and.reduce(positive | (coefficients < -_MARGIN))
+    changes = np.add.reduce(positive[1:] != positive[:-1])
+    return (clear & (changes == 1)).nonzero()[0], (~clear | (changes > 1)).nonzero()[0]
 
 
 def roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -135,41 +133,57 @@ def column_roots(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`roots_in_unit_interval` of polynomials stored as columns, ``(size, count)``."""
     size = polynomials.shape[0]
     scale = np.maximum.reduce(np.abs(polynomials))
-    nonzero = scale.nonzero()[0]
-    if nonzero.size == scale.size:  # usually: no row to leave out
+    count = np.count_nonzero(scale)
+    if count == scale.size:  # usually: no row to leave out
+        nonzero = None
         normalised = polynomials / scale
     else:
+        nonzero = scale.nonzero()[0]
         normalised = polynomials[:, nonzero] / scale[nonzero]
-    count = nonzero.size
     coefficients = (_by_columns(size, 'pieces') @ normalised).reshape(size, -1)
     # Every piece that may hold a root is split into eighths (one product) and classified;
     # unresolved parts are split once more. Pending parts: owner row, start, coefficients.
     pending = _may_hold_roots(coefficients)
-    owners, starts = pending % count, (pending // count) / _PIECES
+    starts, owners = np.divmod(pending, count)
+    starts = starts / _PIECES
     coefficients = coefficients[:, pending]
     found: list[tuple] = []  # parts with one root: (owners, starts, widths, coefficients)
     for level in range(1, _LEVELS + 1):
         width = 1.0 / (_PIECES * _SPLIT ** level)
         parts = (_by_columns(size, 'split') @ coefficients).reshape(size, -1)
         single, unresolved = _classify(parts)
-        parent = single % owners.size  # part p of pending column c is column p·size + c
-        found.append((owners[parent], starts[parent] + (single // owners.size) * width,
-                      np.full(single.size, width), parts[:, single]))
-        parent = unresolved % owners.size
-        owners, starts = owners[parent], starts[parent] + (unresolved // owners.size) * width
-        coefficients = parts[:, unresolved]
-        if not owners.size:
+        part, parent = np.divmod(single, owners.size)  # part p of column c: p·size + c
+        found.append((owners[parent], starts[parent] + part * width, width, parts[:, single]))
+        if not unresolved.size:
+            owners = unresolved
             break
-    roots_of, at, widths, bernstein = (np.concatenate(part, axis=-1)
-                                       for part in zip(*found, strict=True))
-    roots = _newton(normalised[:, roots_of], at, widths, bernstein)
-    if not owners.size:
-        return roots, nonzero[roots_of]
-    hard = np.bincount(owners, minlength=count).nonzero()[0]
-    easy = np.bincount(hard, minlength=count)[roots_of] == 0
-    hard_roots, hard_rows = _eigenvalue_roots(normalised[:, hard].T)
-    return (np.concatenate([roots[easy], hard_roots]),
-            nonzero[np.concatenate([roots_of[easy], hard[hard_rows]])])
+        part, parent = np.divmod(unresolved, owners.size)
+        owners, starts = owners[parent], starts[parent] + part * width
+        coefficients = parts[:, unresolved]
+    if len(found) == 1:  # usually: every root isolated at the first split
+        roots_of, at, widths, bernstein = found[0]
+    else:
+        roots_of, at, bernstein = (np.concatenate(part, axis=-1) for part in
+                                   zip(*((a, b, d) for a, b, _, d in found), strict=True))
+        widths = np.concatenate([np.full(part[0].size, part[2]) for part in found])
+    roots = _newton(_with_slopes(normalised)[:, :, roots_of], at, widths, bernstein)
+    if owners.size:
+        hard = np.bincount(owners, minlength=count).nonzero()[0]
+        easy = np.bincount(hard, minlength=count)[roots_of] == 0
+        hard_roots, hard_rows = _eigenvalue_roots(normalised[:, hard].T)
+        roots = np.concatenate([roots[easy], hard_roots])
+        roots_of = np.concatenate([roots_of[easy], hard[hard_rows]])
+    return roots, roots_of if nonzero is None else nonzero[roots_of]
+
+
+def _with_slopes(columns: np.ndarray) -> np.ndarray:
+    """``(2, size, count)``: the polynomial columns and their derivatives (padded with 0)."""
+    size = columns.shape[0]
+    pair = np.empty((2,) + columns.shape)
+    pair[0] = columns
+    np.multiply(columns[1:], _ORDERS[1:size, None], out=pair[1, :-1])
+    pair[1, -1] = 0.0
+    return pair
 
 
 def quadratic_roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -193,49 +207,46 @@ def quadratic_roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarra
     return roots[which, rows], rows
 
 
-def _newton(coefficients: np.ndarray, starts: np.ndarray, widths: np.ndarray,
+def _newton(pair: np.ndarray, starts: np.ndarray, widths: np.ndarray | float,
             bernstein: np.ndarray) -> np.ndarray:
     """
-    Return the one root of polynomial column ``k`` in ``[starts[k], starts[k] + widths[k]]``.
+    Return the one root of polynomial ``k`` in ``[starts[k], starts[k] + widths[k]]``.
 
-    ``bernstein`` holds each part's Bernstein coefficients (columns), with one sign change
-    (the first and last are the values at the part's ends). Newton's method from where the
-    control polygon crosses zero: two steps for all, more for those whose last step was
-    not yet below ``_LAST_STEP``. Columns that have not converged inside their
-    part by then (rare) continue safeguarded: a step leaving the bracket bisects it.
+    ``pair`` holds each polynomial and its derivative as columns, ``(2, size, count)``
+    (:func:`_with_slopes`); ``bernstein`` each part's Bernstein coefficients (columns),
+    with one sign change (the first and last are the values at the part's ends). Newton's
+    method from where the control polygon crosses zero: two steps for all,
+    more (for all) while some last step was not yet below ``_LAST_STEP``. Columns that
+    have not converged inside their part by then (rare) continue safeguarded: a step
+    leaving the bracket bisects it.
     """
-    size = coefficients.shape[0]
+    size = pair.shape[1]
     # Start where the control polygon (the Bernstein coefficients at k/(size - 1)) crosses
-    # zero: its one sign change, between coefficients k and k + 1.
+    # zero: its one sign change, between coefficients k and k + 1, where k + 1 is the
+    # number of coefficients with the first one's sign.
     positive = bernstein > 0.0
-    change = np.argmax(positive[1:] != positive[:-1], axis=0)
+    change = np.add.reduce(positive)
+    change = np.where(positive[0], change - 1, size - 1 - change)
     columns = np.arange(change.size)
     before, after = bernstein[change, columns], bernstein[change + 1, columns]
     point = starts + widths * (change + before / (before - after)) / (size - 1)
-    # Value and slope by one product: (2, size, count), the slopes padded with a 0.
-    pair = np.zeros((2, size, point.size))
-    pair[0] = coefficients
-    pair[1, :-1] = coefficients[1:] * _ORDERS[1:size, None]
     powers = _ORDERS[:size, None]
-    for _ in range(2):
+    converged = False
+    for step_count in range(_NEWTON_STEPS):
         both = np.einsum('jkn,kn->jn', pair, point ** powers)
         step = both[0] / both[1]
         point -= step
-    active = (np.abs(step) > _LAST_STEP).nonzero()[0]
-    for _ in range(_NEWTON_STEPS - 2 if active.size else 0):
-        both = np.einsum('jkn,kn->jn', pair[:, :, active], point[active] ** powers)
-        step = both[0] / both[1]
-        point[active] -= step
-        active = active[np.abs(step) > _LAST_STEP]
-        if not active.size:
+        if step_count and np.maximum.reduce(np.abs(step), initial=0.0) <= _LAST_STEP:
+            converged = True
             break
-    settled = (point >= starts) & (point <= starts + widths)
-    settled[active] = False
+    ends = starts + widths
+    settled = (point >= starts) & (point <= ends)
+    if not converged:
+        settled &= np.abs(step) <= _LAST_STEP
     if not settled.all():
         again = (~settled).nonzero()[0]
-        point[again] = _safeguarded(coefficients[:, again].T, pair[1, :-1, again],
-                                    starts[again], starts[again] + widths[again],
-                                    bernstein[0, again] < 0.0)
+        point[again] = _safeguarded(pair[0, :, again], pair[1, :-1, again], starts[again],
+                                    ends[again], bernstein[0, again] < 0.0)
     return point
 
 

@@ -153,7 +153,21 @@ def per_joint_rows(like: np.ndarray | None = None, **values: ArrayLike) -> np.nd
 
     The joint count is the one the 1-D arrays agree on (or ``like.size``); scalars apply
     to every joint. One finiteness check covers all rows; a failure names the argument.
+    Numpy arrays of one 1-D shape, all finite (the usual call), are stacked in one step.
     """
+    shape = None
+    for value in values.values():
+        if type(value) is not np.ndarray or value.shape != (shape or value.shape):
+            break
+        shape = value.shape
+    else:
+        if shape and len(shape) == 1 and shape[0] and (like is None or like.size == shape[0]):
+            try:
+                rows = np.array(list(values.values()), dtype=float)
+            except (TypeError, ValueError):  # not numbers: the checks below say so
+                rows = None
+            if rows is not None and every(np.isfinite(rows)):
+                return rows
     arrays = []
     sizes = set() if like is None else {like.size}
     for name, value in values.items():
