@@ -70,7 +70,11 @@ def check_plan(case, motion, state, hold, profile, a_limit, rate):
         qe, ve, _ = plan.sample(np.array([duration]))
         assert np.allclose(qe[0], motion.end, atol=1e-6 * (1 + np.abs(motion.end)).max())
         assert np.allclose(ve[0], 0.0, atol=1e-6), 'not at rest at the end'
-    assert np.all(np.abs(v) <= MAX_VELOCITY * (1 + 1e-6) + 1e-9), 'velocity limit'
+    v_limit = np.maximum(MAX_VELOCITY, np.abs(state.velocity))
+    if profile == 'scurve':  # bounded jerk: the velocity goes on by a0 |a0| / (2 j_max)
+        v_limit = np.maximum(v_limit, np.abs(state.velocity + state.acceleration * np.abs(
+            state.acceleration) / (2.0 * DEFAULT_MAX_JERK)))
+    assert np.all(np.abs(v) <= v_limit * (1 + 1e-6) + 1e-9), 'velocity limit'
     assert np.all(np.abs(a) <= a_limit * (1 + 1e-6) + 1e-9), 'acceleration limit'
     if profile == 'scurve':  # from the state's acceleration, jerk within the default limit
         assert np.allclose(a[0], state.acceleration, atol=1e-6), 'acceleration jumps'
