@@ -18,6 +18,7 @@ from traj_gen_ros import (
 )
 from traj_gen_ros.scurve_move import scurve, scurve_min_time
 from traj_gen_ros.scurve_ruckig import Move
+from traj_gen_ros.trajectory import Trajectory
 
 FAST = settings(max_examples=80, deadline=None)
 TOL = 1e-9
@@ -303,6 +304,10 @@ def test_peaks_report_jerk_the_largest_cubic_coefficient_times_six():
     manual = [max(abs(6.0 * c) for c in plan.coefficients[:, 3, joint]) for joint in (0, 1)]
     assert plan.peak_jerk().tolist() == pytest.approx(manual, rel=1e-15)
     assert plan.peaks()[2].tolist() == pytest.approx(manual, rel=1e-15)
+    # One pass for all three is the same as the separate ones (limit_violation uses it).
+    velocity, acceleration = Trajectory.peaks(plan)
+    assert [a.tolist() for a in plan.peaks_with_jerk()] == \
+        [velocity.tolist(), acceleration.tolist(), plan.peak_jerk().tolist()]
     assert manual == pytest.approx([3.0, 2.0], rel=1e-12)
     ramp = scurve_min_time(np.zeros(1), np.ones(1), np.zeros(1), np.zeros(1), np.ones(1),
                            np.ones(1), np.ones(1))

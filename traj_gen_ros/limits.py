@@ -73,11 +73,12 @@ def limit_violation(
 
     The excess is measured relative to the limit; ``LIMIT_TOLERANCE`` of it is allowed.
     """
-    peaks = list(trajectory.peaks()[:2])
     limits = [np.asarray(max_velocity, dtype=float), np.asarray(max_acceleration, dtype=float)]
     names = ['velocity', 'acceleration']
-    if max_jerk is not None:
-        peaks.append(trajectory.peak_jerk())
+    if max_jerk is None:
+        peaks = list(trajectory.peaks()[:2])
+    else:
+        peaks = list(trajectory.peaks_with_jerk())
         limits.append(np.asarray(max_jerk, dtype=float))
         names.append('jerk')
     ratios = np.stack([peak / limit for peak, limit in zip(peaks, limits, strict=True)])

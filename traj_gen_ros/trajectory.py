@@ -98,11 +98,20 @@ class Trajectory:
         Extrema from the closed-form roots of the next derivative (:func:`peak_abs`): exact
         to rounding, not sampled estimates.
         """
-        velocity = _derivative(self.coefficients)
-        acceleration = _derivative(velocity)
-        durations = self._piece_durations(velocity.shape[2])
-        peak_velocity, peak_acceleration = peak_abs(durations, velocity, acceleration)
+        peak_velocity, peak_acceleration = self._peaks(2)
         return peak_velocity, peak_acceleration
+
+    def peaks_with_jerk(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Largest ``|velocity|``, ``|acceleration|`` and ``|jerk|`` per joint, in one pass."""
+        peak_velocity, peak_acceleration, peak_jerk = self._peaks(3)
+        return peak_velocity, peak_acceleration, peak_jerk
+
+    def _peaks(self, orders: int) -> list[np.ndarray]:
+        """Exact peaks of the first ``orders`` derivatives, one :func:`peak_abs` call."""
+        series = [_derivative(self.coefficients)]
+        for _ in range(orders - 1):
+            series.append(_derivative(series[-1]))
+        return peak_abs(self._piece_durations(self.joint_count), *series)
 
     def _piece_durations(self, joint_count: int) -> np.ndarray:
         """Each piece's length (s) per joint, ``(pieces, joints)``."""
@@ -206,8 +215,7 @@ class JerkLimitedTrajectory(Trajectory):
 
     def peaks(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Find the largest ``|velocity|``, ``|acceleration|`` and ``|jerk|`` per joint."""
-        velocity, acceleration = super().peaks()
-        return velocity, acceleration, self.peak_jerk()
+        return self.peaks_with_jerk()
 
 
 def _horner(
