@@ -250,9 +250,10 @@ def _interior_polynomials(profile: str, *moves: np.ndarray) -> np.ndarray:
 
 
 # At a resultant's root τ*, P and ∂P/∂τ vanish at the extremum's duration T*, so there
-# dT/dτ = -P_τ/P_T = 0: an error ε in τ moves T* by ~P_ττ ε²/(2 P_T), ~1e-18 relative for
-# the ε ≈ 1e-9 this step leaves (Newton: ε ≈ C·step², C = |r''/2r'|), except where
-# P_T ≈ 0 too, where T* is a near-double root of P whose rounding is as large already.
+# dT/dτ = -P_τ/P_T = 0: an error ε in τ moves T* by ~P_ττ ε²/(2 P_T), second order. This
+# step leaves ε ≈ C·step² (C = |r''/2r'|): ~1e-9 usually, up to ~1e-7 in random trials,
+# so T* moves by ~1e-18 to ~1e-14 relative, except where P_T ≈ 0 too (T* a near-double
+# root of P, whose rounding is as large already).
 # The quadratic's other root is no extremum (it only adds a candidate where feasibility
 # does not change) and moves with ε to first order: harmless.
 _TAU_STEP = 1e-5
