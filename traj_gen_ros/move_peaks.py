@@ -40,6 +40,27 @@ def _unit_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray, roots: np.ndarra
     np.minimum(np.maximum(roots, 0.0, out=roots), 1.0, out=roots)
 
 
+def _coefficient_matrix() -> np.ndarray:
+    """
+    ``(9, 3)``: the quintic's coefficients from ``(α, D/T, e0 = a0 T)``, linear in them.
+
+    Row ``3·power + k``: the ascending coefficient ``power`` of ``w`` (``k = 0``: ``α, β,
+    γ``), of ``E`` (``k = 1``: ``e0, e1, e2``; its roots are v's extrema) and of ``(1 -
+    τ)E``'s derivative (``k = 2``: ``e1 - e0, 2(e2 - e1), -3 e2``, up to its sign; its
+    roots are a's extrema), with ``β = 2α + e0``, ``γ = 30 D/T - 15α - 2.5 e0``,
+    ``e1 = 2γ - 3β`` and ``e2 = -4γ``.
+    """
+    alpha, ratio, e0 = np.eye(3)
+    beta = 2.0 * alpha + e0
+    gamma = 30.0 * ratio - 15.0 * alpha - 2.5 * e0
+    e1, e2 = 2.0 * gamma - 3.0 * beta, -4.0 * gamma
+    return np.array([[alpha, e0, e1 - e0], [beta, e1, 2.0 * (e2 - e1)],
+                     [gamma, e2, -3.0 * e2]]).reshape(9, 3)
+
+
+_COEFFICIENTS = _coefficient_matrix()
+
+
 def peaks(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
           start_acceleration: np.ndarray, duration: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
@@ -60,20 +81,15 @@ def peaks(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
         peak_acceleration = np.maximum(np.abs(beta - alpha), np.abs(beta + alpha)) * inverse
         return peak_velocity, peak_acceleration
     e0 = start_acceleration * duration  # = β - 2α
-    # Coefficients (ascending) of w, of E (whose roots are v's extrema) and of
-    # (1 - τ)E's derivative (whose roots are a's extrema), computed in place.
-    gamma = 30.0 * displacement * inverse - 15.0 * alpha - 2.5 * e0  # every input's shape
-    table = np.empty((3, 3) + gamma.shape)
-    table[0, 0], table[2, 0], table[0, 1] = alpha, gamma, e0
-    beta = np.add(2.0 * alpha, e0, out=table[1, 0])
-    e1 = np.subtract(2.0 * gamma, 3.0 * beta, out=table[1, 1])
-    e2 = np.multiply(gamma, -4.0, out=table[2, 1])
-    np.subtract(e1, e0, out=table[0, 2])
-    table[1, 2] = 2.0 * (e2 - e1)
-    np.multiply(e2, -3.0, out=table[2, 2])
+    ratio = displacement * inverse
+    # Every coefficient below is linear in (α, D/T, e0): one product gives them all.
+    shape = np.broadcast(alpha, ratio, e0).shape
+    basis = np.empty((3,) + shape)
+    basis[0], basis[1], basis[2] = alpha, ratio, e0
+    table = (_COEFFICIENTS @ basis.reshape(3, -1)).reshape((3, 3) + shape)
     # Each quadratic's two roots, then τ = 0 (where v = α and a = e0/T): v is checked at
     # E's roots, a at the other's; τ = 1 gives v = a = 0.
-    points = np.zeros((3, 2) + e2.shape)
+    points = np.zeros((3, 2) + shape)
     _unit_roots(*table[:, 1:], points[:2])
     # w at E's roots and E at the others, times (1 - τ)² and (1 - τ): v and a T.
     values = table[0, :2] + points * (table[1, :2] + points * table[2, :2])

@@ -249,6 +249,15 @@ def _interior_polynomials(profile: str, *moves: np.ndarray) -> np.ndarray:
     return _interior_columns(profile, *moves).reshape(10, 2, 2, -1).transpose(1, 2, 3, 0)
 
 
+# At a resultant's root τ*, P and ∂P/∂τ vanish at the extremum's duration T*, so there
+# dT/dτ = -P_τ/P_T = 0: an error ε in τ moves T* by ~P_ττ ε²/(2 P_T), second order. This
+# step leaves ε ≈ C·step² (C = |r''/2r'|): ~1e-9 usually, up to ~1e-7 in random trials,
+# so T* moves by ~1e-18 to ~1e-14 relative, except where P_T ≈ 0 too (T* a near-double
+# root of P, whose rounding is as large already).
+# The quadratic's other root is no extremum (it only adds a candidate where feasibility
+# does not change) and moves with ε to first order: harmless.
+_TAU_STEP = 1e-5
+
 _INPUT_TABLES = {profile: np.concatenate([_END_TABLES[profile], _COEFFICIENT_TABLES[profile]])
                  for profile in _SHAPES}
 
@@ -272,7 +281,7 @@ def durations(profile: str, displacement: np.ndarray, velocity: np.ndarray,
     if profile == 'cubic':  # quadratics in τ (velocity only): closed form
         taus, owners = quadratic_roots_in_unit_interval(columns[:3, :2 * displacement.size].T)
     else:
-        taus, owners = column_roots(columns)
+        taus, owners = column_roots(columns, _TAU_STEP)
     # The ends' quadratics (3 powers · ends, joints), then P's coefficients as polynomials
     # in τ (3 powers, 6 degrees, 4·joints columns): one product.
     products = _INPUT_TABLES[profile] @ inputs

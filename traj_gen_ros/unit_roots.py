@@ -17,7 +17,8 @@ a handful of vectorised steps instead:
    are still unresolved (close roots, such as the near-double ones of the quintic's
    acceleration resultant near τ = (3 ± √3)/6) are split into eighths once more.
 3. Each part with one root: Newton's method inside it, from where its control polygon
-   crosses zero, to machine precision.
+   crosses zero, to machine precision (or, when the caller asks, until the last step is
+   below its own ``last_step``: see :func:`column_roots`).
 
 Polynomials are stored as columns ``(size, count)`` so that every per-piece test is a
 reduction over axis 0, which numpy does in one pass over contiguous rows.
@@ -129,8 +130,15 @@ def roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndar
     return column_roots(polynomials.T)
 
 
-def column_roots(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`roots_in_unit_interval` of polynomials stored as columns, ``(size, count)``."""
+def column_roots(polynomials: np.ndarray,
+                 last_step: float = _LAST_STEP) -> tuple[np.ndarray, np.ndarray]:
+    """
+    :func:`roots_in_unit_interval` of polynomials stored as columns, ``(size, count)``.
+
+    Newton's method stops once every last step is below ``last_step`` (at least two steps
+    each); the default leaves the roots to machine precision. A larger one leaves an error
+    of about ``C·last_step²`` (``C = |p''/2p'|``), for callers that need less.
+    """
     size = polynomials.shape[0]
     scale = np.maximum.reduce(np.abs(polynomials))
     count = np.count_nonzero(scale)
@@ -166,7 +174,8 @@ def column_roots(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         roots_of, at, bernstein = (np.concatenate(part, axis=-1) for part in
                                    zip(*((a, b, d) for a, b, _, d in found), strict=True))
         widths = np.concatenate([np.full(part[0].size, part[2]) for part in found])
-    roots = _newton(_with_slopes(normalised)[:, :, roots_of], at, widths, bernstein)
+    roots = _newton(_with_slopes(normalised)[:, :, roots_of], at, widths, bernstein,
+                    last_step)
     if owners.size:
         hard = np.bincount(owners, minlength=count).nonzero()[0]
         easy = np.bincount(hard, minlength=count)[roots_of] == 0
@@ -208,7 +217,7 @@ def quadratic_roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarra
 
 
 def _newton(pair: np.ndarray, starts: np.ndarray, widths: np.ndarray | float,
-            bernstein: np.ndarray) -> np.ndarray:
+            bernstein: np.ndarray, last_step: float = _LAST_STEP) -> np.ndarray:
     """
     Return the one root of polynomial ``k`` in ``[starts[k], starts[k] + widths[k]]``.
 
@@ -216,7 +225,7 @@ def _newton(pair: np.ndarray, starts: np.ndarray, widths: np.ndarray | float,
     (:func:`_with_slopes`); ``bernstein`` each part's Bernstein coefficients (columns),
     with one sign change (the first and last are the values at the part's ends). Newton's
     method from where the control polygon crosses zero: two steps for all,
-    more (for all) while some last step was not yet below ``_LAST_STEP``. Columns that
+    more (for all) while some last step was not yet below ``last_step``. Columns that
     have not converged inside their part by then (rare) continue safeguarded: a step
     leaving the bracket bisects it.
     """
@@ -236,13 +245,13 @@ def _newton(pair: np.ndarray, starts: np.ndarray, widths: np.ndarray | float,
         both = np.einsum('jkn,kn->jn', pair, point ** powers)
         step = both[0] / both[1]
         point -= step
-        if step_count and np.maximum.reduce(np.abs(step), initial=0.0) <= _LAST_STEP:
+        if step_count and np.maximum.reduce(np.abs(step), initial=0.0) <= last_step:
             converged = True
             break
     ends = starts + widths
     settled = (point >= starts) & (point <= ends)
     if not converged:
-        settled &= np.abs(step) <= _LAST_STEP
+        settled &= np.abs(step) <= last_step
     if not settled.all():
         again = (~settled).nonzero()[0]
         point[again] = _safeguarded(pair[0, :, again], pair[1, :-1, again], starts[again],
