@@ -78,6 +78,25 @@ def node_env(extra_pythonpath: bool = True) -> dict:
     return env
 
 
+def end_process(process: subprocess.Popen, sig: int = signal.SIGTERM,
+                timeout: float = 10.0) -> int:
+    """
+    Signal ``process`` and wait for it; kill it if it has not ended within ``timeout`` s.
+
+    Always returns with the process gone, so a helper that hangs on a loaded machine
+    cannot outlive its test and leak into the next one (a robot_description publisher
+    left running once gave every later node in the domain its URDF limits).
+    """
+    if process.poll() is None:
+        process.send_signal(sig)
+        try:
+            process.wait(timeout)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+    return process.returncode
+
+
 class NodeProcess:
     """A generator node subprocess; output goes to a temporary log file."""
 
@@ -100,14 +119,7 @@ class NodeProcess:
 
     def stop(self, sig: int = signal.SIGINT, timeout: float = 10.0) -> int:
         """Signal the process and wait; kill it if it does not end in time."""
-        if self.process.poll() is None:
-            self.process.send_signal(sig)
-            try:
-                self.process.wait(timeout)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait()
-        return self.process.returncode
+        return end_process(self.process, sig, timeout)
 
     def close(self) -> None:
         """Make sure the process is gone and the log is removed."""

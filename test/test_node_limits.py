@@ -18,6 +18,7 @@ import textwrap
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from node_harness import (
     CONFIG,
+    end_process,
     node_env,
     Probe,
     running_node,
@@ -104,8 +105,8 @@ def published_first():
         assert process.stdout.readline().strip() == 'published'
         yield process
     finally:
-        process.terminate()
-        process.wait(10)
+        end_process(process)
+        process.stdout.close()
 
 
 def test_urdf_from_the_topic_limits_goals_via_points_and_plans(published_first):
