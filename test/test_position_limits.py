@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 from traj_gen_ros import min_time
-from traj_gen_ros.blends import brake
+from traj_gen_ros.braking import brake
 from traj_gen_ros.joint_limits import merge_limits, UrdfLimits
 from traj_gen_ros.motion_planning import plan_request, plan_stop, State
 from traj_gen_ros.node_config import make_config

@@ -30,7 +30,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from traj_gen_ros.blends import brake
+from traj_gen_ros.braking import brake
 from traj_gen_ros.limits import JointError, limit_violation
 from traj_gen_ros.node_config import Config
 from traj_gen_ros.paths import plan_path

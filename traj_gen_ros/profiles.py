@@ -6,7 +6,8 @@ Positions are scalars (one joint) or 1-D arrays (one value per joint); via point
 SI: rad (or m), s.
 """
 
-from traj_gen_ros.blends import BlendedTrajectory, brake, lspb, lspb_via
+from traj_gen_ros.blends import BlendedTrajectory, lspb, lspb_via
+from traj_gen_ros.braking import brake
 from traj_gen_ros.limits import (
     JointError,
     LIMIT_TOLERANCE,

@@ -1,7 +1,7 @@
 """
 Jerk-limited braking: each joint to rest as fast as ``|a| ≤ a_max``, ``|j| ≤ j_max`` allow.
 
-The third-order counterpart of :func:`traj_gen_ros.blends.brake` (the node's ``~/stop`` with
+The third-order counterpart of :func:`traj_gen_ros.braking.brake` (the node's ``~/stop`` with
 the S-curve profile), in closed form. Bringing the acceleration to zero at once would leave
 the joint at ``v_zero = v0 + a0|a0|/(2 j_max)``; the velocity must change against the sign
 ``d`` of that. In the frame where that change is downwards (``v = d v0``, ``a = d a0``) the
