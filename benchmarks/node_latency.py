@@ -204,7 +204,10 @@ def send_and_time(recorder: Recorder, message, generator_node: bool = True
     if generator_node:
         recorder.spin_until(lambda: len(recorder.trajectories) > count)
         arrival, data = recorder.trajectories[-1]
-        start_ns = stamp_of(data)
+        # Stamped at the plan's start; its points begin at the first setpoint streamed
+        # from it (one period in for a plan planned again from the last published one).
+        first_point = deserialize_message(data, JointTrajectory).points[0].time_from_start
+        start_ns = stamp_of(data) + first_point.sec * 1_000_000_000 + first_point.nanosec
 
         def new(row) -> bool:
             return row[1] >= start_ns

@@ -5,8 +5,8 @@ The real handler, stream and answers on a fake clock (no stream thread: the test
 the ticks), the answers in an rclpy node.
 
 A plan that the stream overtakes is planned again from the setpoint published last,
-exactly as published, and takes over at the next tick; ``~/trajectory`` then starts at
-that tick.
+exactly as published, and takes over at the next tick; ``~/trajectory`` is stamped at
+that setpoint (the plan's start) and its points begin at the next tick.
 """
 
 from diagnostic_msgs.msg import DiagnosticStatus
@@ -108,11 +108,14 @@ def test_a_plan_the_stream_overtook_restarts_from_the_published_setpoint(node):
     assert calls[1].position.tolist() == position.tolist()
     assert calls[1].velocity.tolist() == velocity.tolist()
     assert np.all(velocity != 0.0)
-    # It takes over at the next tick, and ~/trajectory starts there.
+    # It takes over at the next tick. ~/trajectory is stamped at the plan's start, the
+    # published setpoint, and its points begin at the takeover, one period in.
     trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
     stamp = trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec
     takeover = rig.tick()
-    assert stamp == takeover
+    assert stamp == published_at
+    first_point = trajectory.points[0].time_from_start
+    assert first_point.sec * 10**9 + first_point.nanosec == takeover - published_at
     stamp_ns, new_position, new_velocity = rig.state()
     elapsed = (stamp_ns - published_at) * 1e-9
     expected = motion.plan.sample(elapsed)
@@ -138,5 +141,5 @@ def test_a_request_overtaken_every_time_is_refused_with_the_reason(node):
     values = rig.answers.values('goal', '', 0)
     assert rig.handler.execute(Request('goal', values, 0, request), always_late) is None
     level, text, _ = rig.statuses[-1]
-    assert level == DiagnosticStatus.ERROR and 'passed its start 3 times' in text
+    assert level == DiagnosticStatus.ERROR and 'passed its start 6 times' in text
     assert rig.state()[1].tolist() == [0.0, 0.0]  # still holding

@@ -70,19 +70,21 @@ class Answers:
             values['received'] = str(received)
         return values
 
-    def trajectory(self, first_ns: int, offset: float, motion: PlannedMotion,
+    def trajectory(self, start_ns: int, offset: float, motion: PlannedMotion,
                    rate_hz: float) -> bytes:
         """
         Sample the plan every ``1/rate_hz`` s into a ``JointTrajectory`` (CDR bytes).
 
-        From its first streamed setpoint, ``offset`` s into the plan (0 unless the plan took
-        over a tick after its start), stamped ``first_ns``: the message shows what the
-        stream publishes. Raises :class:`~traj_gen_ros.request_parsing.RequestError` if a
-        sample is not finite.
+        Stamped ``start_ns``, the plan's time 0 (its start state, a setpoint of the
+        stream), so ``time_from_start`` is time into the plan, as a via request gives it.
+        The points begin at the first setpoint the stream publishes from the plan,
+        ``offset`` s in: 0, or one period for a plan that was planned again from the
+        setpoint published last. Raises
+        :class:`~traj_gen_ros.request_parsing.RequestError` if a sample is not finite.
         """
         times, positions, velocities, accelerations = sample_motion(motion, rate_hz, offset)
-        time_ns = np.round((times - offset) * 1e9).astype(np.int64)
-        return joint_trajectory_cdr(first_ns, list(self._joint_names()), time_ns, positions,
+        time_ns = np.round(times * 1e9).astype(np.int64)
+        return joint_trajectory_cdr(start_ns, list(self._joint_names()), time_ns, positions,
                                     velocities, accelerations)
 
     def publish_trajectory(self, message: bytes) -> None:

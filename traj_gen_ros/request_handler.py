@@ -66,14 +66,16 @@ REQUEST_DEPTH = 1000
 #: and the stream keeps its rate. A request after a quiet spell is not delayed.
 REQUEST_ROUND_PERIOD = 0.005
 #: A new motion starts at the first tick at least the median planning time of the last
-#: RECENT requests away, so that it is ready by then (a few hundred us: most often the
-#: very next tick). One whose start tick the stream published while it was planned is
-#: planned again from the last published setpoint (to take over at the next tick) if it
-#: took at most RETRY_PERIODS periods, else (and after that) from a tick twice the time it
-#: took away; at most PLAN_ATTEMPTS times in all. Margins are capped at MAX_MARGIN_NS.
+#: RECENT requests of its kind and profile away, so that it is ready by then (a few
+#: hundred us: most often the very next tick). One whose start tick the stream published
+#: while it was planned is planned again from the last published setpoint (to take over at
+#: the next tick) if it took at most RETRY_PERIODS periods; else, and after that, from a
+#: tick further away: twice the time the attempt took, and at least twice the margin
+#: before (a loaded machine whose planning times vary widely is caught up with), at most
+#: PLAN_ATTEMPTS times in all. Margins are capped at MAX_MARGIN_NS.
 RECENT = 5
 MAX_MARGIN_NS = 500_000_000
-PLAN_ATTEMPTS = 3
+PLAN_ATTEMPTS = 6
 RETRY_PERIODS = 2
 #: The OK status waits at most this long (s) for the motion's first setpoint.
 ANSWER_WAIT = 0.1
@@ -98,8 +100,9 @@ class RequestHandler:
         self._now_ns = now_ns
         self._log_error = log_error
         self._last_round = 0.0  # time.monotonic() at the end of the last request callback
-        # How long the last requests took to plan and sample (ns).
-        self._recent_ns: collections.deque[int] = collections.deque([0], maxlen=RECENT)
+        # How long the last requests of each (kind, profile) took to plan (ns).
+        self._recent_ns: dict[tuple[str, str], collections.deque[int]] = \
+            collections.defaultdict(lambda: collections.deque([0], maxlen=RECENT))
 
     # ------------------------------------------------------------------ take and parse
 
@@ -186,7 +189,7 @@ class RequestHandler:
             return None
         motion, now_ns, start_ns, first_ns = placed
         try:
-            message = self._answers.trajectory(first_ns, (first_ns - start_ns) * 1e-9, motion,
+            message = self._answers.trajectory(start_ns, (first_ns - start_ns) * 1e-9, motion,
                                                config.rate_hz)
         except Exception as error:  # noqa: BLE001 - checked plans are finite: a bug if not
             self._log_error(f'sampling an accepted {request.kind} failed: {error!r}; braking')
@@ -208,9 +211,10 @@ class RequestHandler:
         published it meanwhile: again from the setpoint it published last (a re-plan is
         faster than a cold first one: usually ready for the next tick), unless planning
         took over ``RETRY_PERIODS`` periods (a long path); then, and after a second miss,
-        from the tick twice the last attempt's time away.
+        from a tick at least twice the last attempt's time and twice the last margin away.
         """
-        margin_ns = int(statistics.median(self._recent_ns))
+        recent_ns = self._recent_ns[request.kind, config.profile]
+        margin_ns = int(statistics.median(recent_ns))
         start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
         for attempt in range(PLAN_ATTEMPTS):
             began = time.perf_counter_ns()
@@ -231,12 +235,12 @@ class RequestHandler:
             elapsed_ns = time.perf_counter_ns() - began
             first_ns = self._stream.splice(start_ns, motion)
             if first_ns is not None:
-                self._recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
+                recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
                 return motion, now_ns, start_ns, first_ns
             if attempt == 0 and elapsed_ns <= RETRY_PERIODS * config.period_ns:
                 start_ns = max(request.stamp_ns, self._stream.last_published())
             else:
-                margin_ns = min(2 * elapsed_ns, MAX_MARGIN_NS)
+                margin_ns = min(max(2 * elapsed_ns, 2 * margin_ns), MAX_MARGIN_NS)
                 start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
         self._answers.refused(request, f'the stream passed its start {PLAN_ATTEMPTS} times '
                               f'while it was planned (the last attempt took '
