@@ -99,7 +99,7 @@ def composed(move: Move, plan_move: Callable[[Move], tuple[Trajectory, float]]
         hold = np.array([[move.goal[joint], 0.0, 0.0, 0.0]])
         if time > 0.0 and not (move.v0[joint] or move.a0[joint]):
             stretch = duration / time
-            with np.errstate(all='ignore'):
+            with np.errstate(over='ignore', invalid='ignore'):  # checked finite below
                 times = np.minimum(times * stretch, duration)
                 coefficients = coefficients / stretch ** np.arange(4.0)
         else:

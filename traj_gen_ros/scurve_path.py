@@ -113,7 +113,7 @@ def _check_heuristic(path: np.ndarray, durations: np.ndarray, limits: tuple,
     if not np.count_nonzero(over):
         return
     point, joint = (int(index) for index in np.argwhere(over)[0])
-    with np.errstate(all='ignore'):
+    with np.errstate(over='ignore'):  # a huge step over a short segment: inf, the steepest
         slopes = np.abs(np.diff(path[:, joint]) / durations)
     segment = max((s for s in (point - 1, point) if 0 <= s < len(durations)),
                   key=lambda s: slopes[s])
@@ -222,7 +222,7 @@ def _via_velocities(path: np.ndarray, durations: np.ndarray,
 
 def _heuristic(path: np.ndarray, durations: np.ndarray, start: Start = REST) -> np.ndarray:
     """Craig's heuristic velocities from ``start``; an overflowing slope gives ``inf``."""
-    with np.errstate(all='ignore'):
+    with np.errstate(over='ignore', invalid='ignore'):  # inf slopes, inf - inf: made inf
         velocities = heuristic_velocities(path, durations, start.velocity)
     return np.where(np.isnan(velocities), np.inf, velocities)
 

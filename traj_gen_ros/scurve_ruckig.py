@@ -269,7 +269,7 @@ def _arrives(trajectory: Trajectory, move: Move) -> bool:
     ``1e-8`` plus ``1e-9`` of the positions' or the limit's magnitude.
     """
     c0, c1, c2, c3 = trajectory.coefficients[-1]  # each joint's last piece, at its end
-    with np.errstate(all='ignore'):
+    with np.errstate(over='ignore', invalid='ignore'):  # scaled back: inf or NaN fails
         length = trajectory.breakpoints[-1] - trajectory.breakpoints[-2]
         position = ((c3 * length + c2) * length + c1) * length + c0
         velocity = (3.0 * c3 * length + 2.0 * c2) * length + c1
@@ -319,7 +319,7 @@ def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Fl
         breakpoints[0] = 0.0
         np.minimum(np.cumsum(table[:, 4], axis=0), duration, out=breakpoints[1:])
     else:  # scaled units: the products may overflow, then the plan is refused below
-        with np.errstate(all='ignore'):
+        with np.errstate(over='ignore', invalid='ignore'):
             divisors = np.array([[1.0], [k], [2.0 * k * k], [6.0 * k * k * k]])
             table[:, :4] *= np.array(scales) / divisors
             table[:, 0] += shifts
@@ -362,7 +362,7 @@ def _within(phases: np.ndarray, limits: tuple[Floats, Floats, Floats]) -> bool:
         return True
     pieces, joints = np.nonzero(crossing)
     before = phases[pieces, :, joints]  # (crossings, p v a j t)
-    with np.errstate(all='ignore'):
+    with np.errstate(over='ignore', divide='ignore', invalid='ignore'):  # zero jerk: inf, NaN
         peak = np.abs(before[:, 1] - before[:, 2] ** 2 / (2.0 * before[:, 3]))
     velocity_bound = bounds[0, joints]
     return validation.every(~(peak - velocity_bound > _LIMIT_TOLERANCE * velocity_bound))
