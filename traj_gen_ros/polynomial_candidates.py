@@ -24,7 +24,11 @@ from __future__ import annotations
 import numpy as np
 from traj_gen_ros.polynomial import CUBIC_MATRIX, QUINTIC_MATRIX
 from traj_gen_ros.polynomial_peaks import discriminant
-from traj_gen_ros.unit_roots import column_roots, quadratic_roots_in_unit_interval
+from traj_gen_ros.unit_roots import (
+    ascending_powers,
+    column_roots,
+    quadratic_roots_in_unit_interval,
+)
 
 
 def _padded(*rows: list[float]) -> np.ndarray:
@@ -119,7 +123,6 @@ def _useful_ends(table: np.ndarray) -> np.ndarray:
 
 _LIMIT_POWER = (1, 0)  # the limit term multiplies T (velocity), T² (acceleration)
 _SIGNS = np.array([1.0, -1.0])  # σ
-_POWERS = np.arange(6.0)[:, None]
 _END_TABLES = {profile: _useful_ends(_end_table(shapes)) for profile, shapes in _SHAPES.items()}
 
 
@@ -290,7 +293,8 @@ def durations(profile: str, displacement: np.ndarray, velocity: np.ndarray,
     quadratics = np.empty((3, count + taus.size))
     quadratics[:, :count] = ends.reshape(3, -1)
     shapes = products[-72:].reshape(3, 6, -1)
-    np.einsum('pdr,dr->pr', shapes[:, :, owners], taus ** _POWERS, out=quadratics[:, count:])
+    np.einsum('pdr,dr->pr', shapes[:, :, owners], ascending_powers(taus, 6),
+              out=quadratics[:, count:])
     return _positive_roots(*quadratics).reshape(-1), owners
 
 

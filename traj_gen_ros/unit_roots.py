@@ -185,6 +185,14 @@ def column_roots(polynomials: np.ndarray,
     return roots, roots_of if nonzero is None else nonzero[roots_of]
 
 
+def ascending_powers(points: np.ndarray, size: int) -> np.ndarray:
+    """``(size, n)``: ``points⁰ … points^(size-1)``, by running products (``**`` is slower)."""
+    table = np.empty((size,) + points.shape)
+    table[0] = 1.0
+    table[1:] = points
+    return np.multiply.accumulate(table, axis=0, out=table)
+
+
 def _with_slopes(columns: np.ndarray) -> np.ndarray:
     """``(2, size, count)``: the polynomial columns and their derivatives (padded with 0)."""
     size = columns.shape[0]
@@ -239,10 +247,9 @@ def _newton(pair: np.ndarray, starts: np.ndarray, widths: np.ndarray | float,
     columns = np.arange(change.size)
     before, after = bernstein[change, columns], bernstein[change + 1, columns]
     point = starts + widths * (change + before / (before - after)) / (size - 1)
-    powers = _ORDERS[:size, None]
     converged = False
     for step_count in range(_NEWTON_STEPS):
-        both = np.einsum('jkn,kn->jn', pair, point ** powers)
+        both = np.einsum('jkn,kn->jn', pair, ascending_powers(point, size))
         step = both[0] / both[1]
         point -= step
         if step_count and np.maximum.reduce(np.abs(step), initial=0.0) <= last_step:
