@@ -66,36 +66,6 @@ def stamp_of(data: bytes) -> int:
     return seconds * 1_000_000_000 + nanoseconds
 
 
-def first_point_time_ns(data: bytes) -> int:
-    """
-    ``time_from_start`` (ns) of a CDR ``JointTrajectory``'s first point, read in place.
-
-    (Deserialising a long plan takes the recorder ms, in which arrivals go unrecorded.)
-    Offsets count from the end of the 4-byte encapsulation header; a string or sequence
-    is a ``uint32`` count, and doubles are 8-aligned.
-    """
-    def string_end(offset: int) -> int:
-        offset = (offset + 3) & ~3
-        return offset + 4 + struct.unpack_from('<I', data, 4 + offset)[0]
-
-    offset = string_end(8)  # stamp, then frame_id
-    offset = (offset + 3) & ~3
-    names = struct.unpack_from('<I', data, 4 + offset)[0]
-    offset += 4
-    for _ in range(names):
-        offset = string_end(offset)
-    offset = ((offset + 3) & ~3) + 4  # the point count
-    for _ in range(4):  # positions, velocities, accelerations, effort
-        offset = (offset + 3) & ~3
-        count = struct.unpack_from('<I', data, 4 + offset)[0]
-        offset += 4
-        if count:
-            offset = ((offset + 7) & ~7) + 8 * count
-    offset = (offset + 3) & ~3
-    seconds, nanoseconds = struct.unpack_from('<iI', data, 4 + offset)
-    return seconds * 1_000_000_000 + nanoseconds
-
-
 def bare_node(rate: float) -> None:
     """Run the reference: a timer publishing the JointState, a goal shown at its next tick."""
     rclpy.init()
@@ -234,12 +204,14 @@ def send_and_time(recorder: Recorder, message, generator_node: bool = True
     if generator_node:
         recorder.spin_until(lambda: len(recorder.trajectories) > count)
         arrival, data = recorder.trajectories[-1]
-        # Stamped at the plan's start; its points begin at the first setpoint streamed
-        # from it (one period in for a plan planned again from the last published one).
-        start_ns = stamp_of(data) + first_point_time_ns(data)
+        # Stamped at the plan's start: the tick where it takes over, or the setpoint the
+        # stream published last (a plan planned again from it), which the old motion sent.
+        # The stream stamps each setpoint when it samples it, after its tick: the first
+        # new one is the first stamped after the start.
+        start_ns = stamp_of(data)
 
         def new(row) -> bool:
-            return row[1] >= start_ns
+            return row[1] > start_ns
     else:
         arrival, target = None, message.position[0]
 

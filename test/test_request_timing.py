@@ -5,8 +5,8 @@ The real handler, stream and answers on a fake clock (no stream thread: the test
 the ticks), the answers in an rclpy node.
 
 A plan that the stream overtakes is planned again from the setpoint published last,
-exactly as published, and takes over at the next tick; ``~/trajectory`` is stamped at
-that setpoint (the plan's start) and its points begin at the next tick.
+exactly as published, and takes over at the next tick; ``~/trajectory`` is the plan from
+that setpoint (its start and first point).
 """
 
 from diagnostic_msgs.msg import DiagnosticStatus
@@ -108,14 +108,14 @@ def test_a_plan_the_stream_overtook_restarts_from_the_published_setpoint(node):
     assert calls[1].position.tolist() == position.tolist()
     assert calls[1].velocity.tolist() == velocity.tolist()
     assert np.all(velocity != 0.0)
-    # It takes over at the next tick. ~/trajectory is stamped at the plan's start, the
-    # published setpoint, and its points begin at the takeover, one period in.
+    # It takes over at the next tick. ~/trajectory is the plan from its start: stamped at
+    # the published setpoint, which is its first point.
     trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
     stamp = trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec
-    takeover = rig.tick()
+    rig.tick()
     assert stamp == published_at
-    first_point = trajectory.points[0].time_from_start
-    assert first_point.sec * 10**9 + first_point.nanosec == takeover - published_at
+    assert trajectory.points[0].positions.tolist() == position.tolist()
+    assert trajectory.points[0].velocities.tolist() == velocity.tolist()
     stamp_ns, new_position, new_velocity = rig.state()
     elapsed = (stamp_ns - published_at) * 1e-9
     expected = motion.plan.sample(elapsed)
@@ -123,9 +123,9 @@ def test_a_plan_the_stream_overtook_restarts_from_the_published_setpoint(node):
     assert np.allclose(new_velocity, expected[1][0], atol=1e-12)
     # Within the limits from the published setpoint to the first new one.
     assert np.all(np.abs(new_velocity - velocity) <= CONFIG.max_acceleration * elapsed * 1.001)
-    point = trajectory.points[0]
-    offset = (takeover - published_at) * 1e-9
-    assert np.allclose(point.positions, motion.plan.sample(offset)[0][0], atol=1e-12)
+    point = trajectory.points[1]
+    assert np.allclose(point.positions, motion.plan.sample(1.0 / CONFIG.rate_hz)[0][0],
+                       atol=1e-12)
     assert rig.statuses[-1][0] == DiagnosticStatus.OK
 
 

@@ -70,19 +70,18 @@ class Answers:
             values['received'] = str(received)
         return values
 
-    def trajectory(self, start_ns: int, offset: float, motion: PlannedMotion,
-                   rate_hz: float) -> bytes:
+    def trajectory(self, start_ns: int, motion: PlannedMotion, rate_hz: float) -> bytes:
         """
         Sample the plan every ``1/rate_hz`` s into a ``JointTrajectory`` (CDR bytes).
 
-        Stamped ``start_ns``, the plan's time 0 (its start state, a setpoint of the
-        stream), so ``time_from_start`` is time into the plan, as a via request gives it.
-        The points begin at the first setpoint the stream publishes from the plan,
-        ``offset`` s in: 0, or one period for a plan that was planned again from the
-        setpoint published last. Raises
+        From its start, stamped ``start_ns``: ``time_from_start`` is time into the plan, as
+        a via request gives it, and the first point is the state it was planned from. That
+        is the tick where the stream takes it over, or, for a plan planned again from the
+        setpoint published last, that setpoint (the plan continues it, and the stream's
+        first setpoint from it is the next tick). Raises
         :class:`~traj_gen_ros.request_parsing.RequestError` if a sample is not finite.
         """
-        times, positions, velocities, accelerations = sample_motion(motion, rate_hz, offset)
+        times, positions, velocities, accelerations = sample_motion(motion, rate_hz)
         time_ns = np.round(times * 1e9).astype(np.int64)
         return joint_trajectory_cdr(start_ns, list(self._joint_names()), time_ns, positions,
                                     velocities, accelerations)

@@ -7,6 +7,8 @@ service and the publishers; the work is done by
 * :mod:`traj_gen_ros.request_handler`: a request from its callback to the stream, in the
   order parse (:mod:`~traj_gen_ros.request_parsing`) → validate and plan
   (:mod:`~traj_gen_ros.motion_planning`) → sample → splice into the schedule;
+* :mod:`traj_gen_ros.request_thread`: the thread that waits on ``~/goal`` and
+  ``~/via_points`` alone and runs their callbacks (the executor serves the rest);
 * :mod:`traj_gen_ros.stream`: the thread that publishes the schedule's setpoint
   (:mod:`~traj_gen_ros.schedule`) every period;
 * :mod:`traj_gen_ros.answers`: ``~/status`` and ``~/trajectory``;
@@ -53,6 +55,7 @@ from traj_gen_ros.node_diagnostics import CountingAnswers, NodeDiagnostics
 from traj_gen_ros.node_limits import NodeLimits
 from traj_gen_ros.node_parameters import declare_parameters
 from traj_gen_ros.request_handler import REQUEST_DEPTH, RequestHandler
+from traj_gen_ros.request_thread import NotForTheExecutor, RequestThread
 from traj_gen_ros.stream import (
     EXECUTOR_FIFO_PRIORITY,
     favour_calling_thread,
@@ -93,19 +96,26 @@ class TrajectoryGenerator(Node):
         self._answers = CountingAnswers(self, lambda: self._config.joints)
         self._requests = RequestHandler(lambda: self._config, self._stream, self._answers,
                                         self._now_ns, self.get_logger().error)
+        # Served by the request thread, not the executor (request_thread).
+        requests_only = NotForTheExecutor()
         self._goal_subscription = self.create_subscription(
-            JointState, '~/goal', self._on_goal, REQUEST_DEPTH)
+            JointState, '~/goal', self._on_goal, REQUEST_DEPTH, callback_group=requests_only)
         # Raw: the point count is read off the wire first, so a huge message is refused
-        # without building one Python object per point on the executor thread.
+        # without building one Python object per point.
         self._via_subscription = self.create_subscription(
-            JointTrajectory, '~/via_points', self._on_via_points, REQUEST_DEPTH, raw=True)
+            JointTrajectory, '~/via_points', self._on_via_points, REQUEST_DEPTH, raw=True,
+            callback_group=requests_only)
+        self._request_thread = RequestThread(
+            self.context, [self._goal_subscription, self._via_subscription],
+            self.get_logger().error)
         self.create_service(Trigger, '~/stop', self._on_stop)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._diagnostics = NodeDiagnostics(self, lambda: self._config, self._limits,
                                             self._answers, self._rate_meter)
-        self._answers.trajectory(0, 0.0, held(initial), self._config.rate_hz)  # warm up
+        self._answers.trajectory(0, held(initial), self._config.rate_hz)  # warm up
         priority = self._stream.start()
+        self._request_thread.start()
         self.get_logger().info(
             f'streaming {len(self._config.joints)} joints at {self._config.rate_hz:g} Hz '
             f'({priority}), profile {self._config.profile}')
@@ -151,7 +161,8 @@ class TrajectoryGenerator(Node):
         self._config = self._read_config()  # the stream reads the period every tick
 
     def destroy_node(self) -> None:
-        """Stop the stream thread, then destroy the node."""
+        """Stop the request and stream threads, then destroy the node."""
+        self._request_thread.stop()
         self._stream.stop()
         super().destroy_node()
 

@@ -1,7 +1,9 @@
 """
 A request from its callback to the stream: parse → validate → plan → sample → splice.
 
-The callbacks run on the executor thread. Each takes the request that woke it and every
+The goal and via-point callbacks run on the request thread
+(:mod:`traj_gen_ros.request_thread`), ``~/stop`` on the executor's; a lock lets one
+request through at a time. Each callback takes the request that woke it and every
 request waiting behind it (a burst is drained in one callback: only the newest can run),
 parses each (:mod:`traj_gen_ros.request_parsing`; a malformed one is refused at once),
 answers the older valid ones "superseded", and executes the newest right away:
@@ -11,7 +13,7 @@ answers the older valid ones "superseded", and executes the newest right away:
 2. plan from that state (:mod:`traj_gen_ros.motion_planning`), refusing with a reason;
 3. splice it into the schedule at the start (:mod:`traj_gen_ros.stream`): the stream
    publishes its first setpoint at that tick;
-4. sample the plan for ``~/trajectory`` from that first setpoint and publish it, then the
+4. sample the plan for ``~/trajectory`` from its start and publish it, then the
    OK status once the stream has published that setpoint (a client reading the answer
    sees it started; a delayed start is answered at once) (:mod:`traj_gen_ros.answers`).
 
@@ -31,6 +33,7 @@ from __future__ import annotations
 import collections
 from collections.abc import Callable
 import statistics
+import threading
 import time
 
 from builtin_interfaces.msg import Duration
@@ -100,9 +103,11 @@ class RequestHandler:
         self._now_ns = now_ns
         self._log_error = log_error
         self._last_round = 0.0  # time.monotonic() at the end of the last request callback
-        # How long the last requests of each (kind, profile) took to plan (ns).
-        self._recent_ns: dict[tuple[str, str], collections.deque[int]] = \
-            collections.defaultdict(lambda: collections.deque([0], maxlen=RECENT))
+        # Requests come from the request thread and ~/stop from the executor: one at a time.
+        self._lock = threading.Lock()
+        # How long the last requests of each (kind, profile), and of any, took to plan (ns).
+        self._recent_ns: dict[tuple[str, str], collections.deque[int]] = {}
+        self._any_recent_ns: collections.deque[int] = collections.deque([0], maxlen=RECENT)
 
     # ------------------------------------------------------------------ take and parse
 
@@ -116,23 +121,30 @@ class RequestHandler:
         """
         parse = self._parse_via if raw else self._parse_goal
         try:
-            waiting = [first]
-            with subscription.handle:
-                for _ in range(REQUEST_DEPTH):
-                    taken = subscription.handle.take_message(message_type, raw)
-                    if taken is None:
-                        break
-                    waiting.append(taken)
-            parsed = [parse(message, info.get('received_timestamp', 0))
-                      for message, info in waiting]
-            parsed = [request for request in parsed if request is not None]
-            if parsed:
-                self._answers.superseded(parsed[:-1])
-                newest = parsed[-1]
-                self.execute(newest, lambda config, state, hold_at: plan_request(
-                    config, state, hold_at, newest.request))
+            with self._lock:
+                self._take_newest(subscription, message_type, raw, first, parse)
         finally:
             self._pace()
+
+    def _take_newest(self, subscription: Subscription, message_type: type, raw: bool,
+                     first: tuple[object, dict],
+                     parse: Callable[[object, int], Request | None]) -> None:
+        """Drain the subscription after ``first``; execute the newest valid request."""
+        waiting = [first]
+        with subscription.handle:
+            for _ in range(REQUEST_DEPTH):
+                taken = subscription.handle.take_message(message_type, raw)
+                if taken is None:
+                    break
+                waiting.append(taken)
+        parsed = [parse(message, info.get('received_timestamp', 0))
+                  for message, info in waiting]
+        parsed = [request for request in parsed if request is not None]
+        if parsed:
+            self._answers.superseded(parsed[:-1])
+            newest = parsed[-1]
+            self.execute(newest, lambda config, state, hold_at: plan_request(
+                config, state, hold_at, newest.request))
 
     def _pace(self) -> None:
         """End a request callback no sooner than ``REQUEST_ROUND_PERIOD`` after the last one."""
@@ -189,8 +201,7 @@ class RequestHandler:
             return None
         motion, now_ns, start_ns, first_ns = placed
         try:
-            message = self._answers.trajectory(start_ns, (first_ns - start_ns) * 1e-9, motion,
-                                               config.rate_hz)
+            message = self._answers.trajectory(start_ns, motion, config.rate_hz)
         except Exception as error:  # noqa: BLE001 - checked plans are finite: a bug if not
             self._log_error(f'sampling an accepted {request.kind} failed: {error!r}; braking')
             self._brake(config)
@@ -213,8 +224,9 @@ class RequestHandler:
         took over ``RETRY_PERIODS`` periods (a long path); then, and after a second miss,
         from a tick at least twice the last attempt's time and twice the last margin away.
         """
-        recent_ns = self._recent_ns[request.kind, config.profile]
-        margin_ns = int(statistics.median(recent_ns))
+        recent_ns = self._recent_ns.setdefault((request.kind, config.profile),
+                                               collections.deque(maxlen=RECENT))
+        margin_ns = int(statistics.median(recent_ns or self._any_recent_ns))
         start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
         for attempt in range(PLAN_ATTEMPTS):
             began = time.perf_counter_ns()
@@ -236,6 +248,7 @@ class RequestHandler:
             first_ns = self._stream.splice(start_ns, motion)
             if first_ns is not None:
                 recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
+                self._any_recent_ns.append(recent_ns[-1])
                 return motion, now_ns, start_ns, first_ns
             if attempt == 0 and elapsed_ns <= RETRY_PERIODS * config.period_ns:
                 start_ns = max(request.stamp_ns, self._stream.last_published())
@@ -258,8 +271,9 @@ class RequestHandler:
 
     def stop(self, response: Trigger.Response) -> Trigger.Response:
         """``~/stop``: brake within ``max_acceleration`` from the next tick, then hold."""
-        request = Request('stop', self._answers.values('stop', ''), 0, None)
-        motion = self.execute(request, lambda config, state, _: plan_stop(config, state))
+        with self._lock:
+            request = Request('stop', self._answers.values('stop', ''), 0, None)
+            motion = self.execute(request, lambda config, state, _: plan_stop(config, state))
         response.success = motion is not None
         response.message = ('stopping: at rest in '
                             f'{motion.plan.duration:.3f} s' if motion else 'stop failed')

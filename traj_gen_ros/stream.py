@@ -14,7 +14,7 @@ and position, velocity and acceleration are continuous at the switch.
 
 On a busy machine the thread asks for a real-time priority (``SCHED_FIFO``) and, if that
 is not permitted, a lower nice value; if neither is, it runs as it is (see
-:func:`raise_priority`). Requests and planning run on the executor thread: they hold the
+:func:`raise_priority`). Requests and planning run on the request thread: they hold the
 GIL for at most the interpreter's switch interval at a time while the stream waits for it.
 """
 
@@ -32,7 +32,7 @@ from traj_gen_ros.trajectory_wire import joint_names_cdr, joint_state_cdr
 #: Real-time priority of the stream thread under ``SCHED_FIFO`` (1 lowest, 99 highest):
 #: above every normal process, below the kernel's own real-time threads.
 FIFO_PRIORITY = 10
-#: Real-time priority of the executor thread (requests, planning): below the stream's.
+#: Real-time priority of the request and executor threads (planning): below the stream's.
 EXECUTOR_FIFO_PRIORITY = 5
 #: Nice value of the node's threads (the stream's when ``SCHED_FIFO`` is not permitted).
 STREAM_NICE = -10
