@@ -338,6 +338,19 @@ def generator_session(*ros_args: str, generator: str = '/trajectory_generator',
 
 
 @contextlib.contextmanager
+def in_process_node(name: str):
+    """Yield an rclpy node in this process, in a context of its own (shut down after)."""
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node(name, context=context)
+    try:
+        yield node
+    finally:
+        node.destroy_node()
+        rclpy.shutdown(context=context)
+
+
+@contextlib.contextmanager
 def busy_processes(count: int | None = None):
     """
     Run ``count`` (default: one per core) busy-looping processes; always end them.

@@ -9,9 +9,8 @@ thread, with their message info, and the thread ends promptly when stopped.
 import threading
 import time
 
-import node_harness  # noqa: F401 - isolates the DDS domain of this run
+from node_harness import in_process_node  # also isolates the DDS domain
 import pytest
-import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from sensor_msgs.msg import JointState
 from traj_gen_ros.request_thread import NotForTheExecutor, RequestThread
@@ -19,12 +18,8 @@ from traj_gen_ros.request_thread import NotForTheExecutor, RequestThread
 
 @pytest.fixture
 def node():
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    node = rclpy.create_node('request_thread_test', context=context)
-    yield node
-    node.destroy_node()
-    rclpy.shutdown(context=context)
+    with in_process_node('request_thread_test') as node:
+        yield node
 
 
 def test_requests_run_on_their_thread_not_the_executor(node):

@@ -10,10 +10,9 @@ that setpoint (its start and first point).
 """
 
 from diagnostic_msgs.msg import DiagnosticStatus
-import node_harness  # noqa: F401 - isolates the DDS domain of this run
+from node_harness import in_process_node  # also isolates the DDS domain
 import numpy as np
 import pytest
-import rclpy
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
 from traj_gen_ros.answers import Answers, Request
@@ -33,12 +32,8 @@ CONFIG = make_config(joints=JOINTS, rate_hz=100.0, profile='cubic',
 
 @pytest.fixture
 def node():
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    node = rclpy.create_node('request_timing_test', context=context)
-    yield node
-    node.destroy_node()
-    rclpy.shutdown(context=context)
+    with in_process_node('request_timing_test') as node:
+        yield node
 
 
 class Rig:
