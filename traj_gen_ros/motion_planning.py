@@ -342,29 +342,24 @@ def check_size(motion: PlannedMotion, config: Config) -> PlannedMotion:
     return motion
 
 
-def sample_grid(plan: Trajectory, rate_hz: float, offset: float = 0.0) -> np.ndarray:
-    """
-    Return ``t0, t0 + 1/rate, ...`` (s) up to the plan's end, ending at its duration.
-
-    ``t0 = offset`` (s into the plan), or the duration if the plan ends before it.
-    """
-    offset = min(offset, plan.duration)
-    count = int(math.floor((plan.duration - offset) * rate_hz + 1e-9))
-    times = offset + np.arange(count + 1) / rate_hz
+def sample_grid(plan: Trajectory, rate_hz: float) -> np.ndarray:
+    """Return ``0, 1/rate, 2/rate, ...`` (s) up to the plan's end, ending at its duration."""
+    count = int(math.floor(plan.duration * rate_hz + 1e-9))
+    times = np.arange(count + 1) / rate_hz
     if plan.duration - times[-1] > 1e-9:
         times = np.append(times, plan.duration)
     return times
 
 
-def sample_motion(motion: PlannedMotion, rate_hz: float, offset: float = 0.0
+def sample_motion(motion: PlannedMotion, rate_hz: float
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """
-    Step 4, *sample*: the plan every ``1/rate_hz`` s from ``offset`` s, for ``~/trajectory``.
+    Step 4, *sample*: the plan every ``1/rate_hz`` s from its start, for ``~/trajectory``.
 
     The last sample is exactly the end, at rest. Raises :class:`RequestError` if any
     sample is not finite (then nothing of the plan is published or executed).
     """
-    times = sample_grid(motion.plan, rate_hz, offset)
+    times = sample_grid(motion.plan, rate_hz)
     positions, velocities, accelerations = motion.plan.sample(times)
     positions[-1] = motion.end
     velocities[-1] = 0.0
