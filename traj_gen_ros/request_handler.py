@@ -95,8 +95,14 @@ class RequestHandler:
     """Take requests off the subscriptions, plan the newest, splice it into the stream."""
 
     def __init__(self, config: Callable[[], Config], stream: Stream, answers: Answers,
-                 now_ns: Callable[[], int], log_error: Callable[[str], None]) -> None:
-        """Handle requests with the current ``config()``, on the node clock ``now_ns()``."""
+                 now_ns: Callable[[], int], log_error: Callable[[str], None],
+                 elapsed_ns: Callable[[], int] = time.perf_counter_ns) -> None:
+        """
+        Handle requests with the current ``config()``, on the node clock ``now_ns()``.
+
+        ``elapsed_ns`` times the planning (ns; a test gives its fake clock).
+        """
+        self._elapsed_ns = elapsed_ns
         self._config = config
         self._stream = stream
         self._answers = answers
@@ -229,7 +235,7 @@ class RequestHandler:
         margin_ns = int(statistics.median(recent_ns or self._any_recent_ns))
         start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
         for attempt in range(PLAN_ATTEMPTS):
-            began = time.perf_counter_ns()
+            began = self._elapsed_ns()
             now_ns = self._now_ns()
             state, hold_at = self._stream.state_at(start_ns)
             try:
@@ -244,7 +250,7 @@ class RequestHandler:
                 self._log_error(f'unexpected failure planning {request.kind}: {error!r}')
                 self._answers.refused(request, f'internal error: {error}')
                 return None
-            elapsed_ns = time.perf_counter_ns() - began
+            elapsed_ns = self._elapsed_ns() - began
             first_ns = self._stream.splice(start_ns, motion)
             if first_ns is not None:
                 recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
