@@ -18,7 +18,7 @@ Targets (issue 11): first new joint_states <= one period + 2 ms after the reques
 and from arrival are printed; the targets are judged on arrival, as the issue states them.
 
 Usage: python benchmarks/node_latency.py [--repeats 20] [--seconds 5] [--json]
-[--rates 100 500] [--reaction-only]
+[--rates 100 500] [--profiles cubic quintic lspb scurve] [--reaction-only]
 (`python benchmarks/node_latency.py --bare RATE` runs only the bare node.)
 """
 
@@ -101,6 +101,7 @@ class Recorder(Node):
         self.states: list[tuple[int, int, bytes]] = []  # (arrival ns, stamp ns, data)
         self.trajectories: list[tuple[int, bytes]] = []
         self.received: list[int] = []  # 'received' (ns) of each OK ~/status
+        self.planning: list[tuple[float, int]] = []  # its planning_time (ms) and attempts
         self.create_subscription(JointState, '/joint_states', self._on_state,
                                  QoSProfile(depth=1000, reliability=RELIABLE), raw=True)
         self.create_subscription(
@@ -123,6 +124,8 @@ class Recorder(Node):
         values = {value.key: value.value for value in status.values}
         if status.level == DiagnosticStatus.OK and 'received' in values:
             self.received.append(int(values['received']))
+            self.planning.append((float(values['planning_time']) * 1e3,
+                                  int(values['attempts'])))
 
     def spin_until(self, condition, timeout: float = 20.0) -> None:
         deadline = time.monotonic() + timeout
@@ -187,14 +190,14 @@ def goal_message(position: float) -> JointState:
     return JointState(name=JOINTS, position=[position] * 6)
 
 
-def send_and_time(recorder: Recorder, message, generator_node: bool = True
-                  ) -> tuple[float, float, float | None, float | None]:
+def send_and_time(recorder: Recorder, message, generator_node: bool = True) -> tuple:
     """
     Send ``message``; return ms to the first new joint_states (stamp, arrival), ~/trajectory.
 
     From sending to the first new joint_states' stamp, to its arrival here, to the
-    ~/trajectory's arrival, and from the request's arrival at the node to that stamp
-    (None for the bare node, which reports neither).
+    ~/trajectory's arrival, and from the request's arrival at the node to that stamp,
+    then the node's planning time (ms) and attempts (the last four None for the bare
+    node, which reports none of them).
     """
     count = len(recorder.trajectories)
     answers = len(recorder.received)
@@ -219,12 +222,13 @@ def send_and_time(recorder: Recorder, message, generator_node: bool = True
             return deserialize_message(row[2], JointState).position[0] == target
     recorder.spin_until(lambda: any(new(row) for row in recorder.states[first_state:]))
     row = next(row for row in recorder.states[first_state:] if new(row))
-    after_arrival = None
+    after_arrival, planning = None, (None, None)
     if generator_node:
         recorder.spin_until(lambda: len(recorder.received) > answers)
         after_arrival = (row[1] - recorder.received[-1]) * 1e-6
+        planning = recorder.planning[-1]
     return ((row[1] - sent) * 1e-6, (row[0] - sent) * 1e-6,
-            None if arrival is None else (arrival - sent) * 1e-6, after_arrival)
+            None if arrival is None else (arrival - sent) * 1e-6, after_arrival, *planning)
 
 
 def from_rest(recorder: Recorder, repeats: int, bare: bool = False) -> dict:
@@ -250,12 +254,15 @@ def preempting(recorder: Recorder, repeats: int) -> dict:
 
 
 def summary(rows) -> dict:
-    published, received, trajectory, after_arrival = zip(*rows, strict=True)
+    published, received, trajectory, after_arrival, planning, attempts = zip(*rows,
+                                                                             strict=True)
     result = {'first_state_published_ms': percentiles(published),
               'first_state_received_ms': percentiles(received)}
     if trajectory[0] is not None:
         result['trajectory_received_ms'] = percentiles(trajectory)
         result['first_state_after_arrival_ms'] = percentiles(after_arrival)
+        result['planning_ms'] = percentiles(planning)
+        result['attempts'] = percentiles(attempts)
     return result
 
 
@@ -303,7 +310,7 @@ def reaction(args: argparse.Namespace, results: dict) -> None:
         recorder = Recorder()
         try:
             recorder.wait_ready()
-            for profile in PROFILES:
+            for profile in args.profiles:
                 recorder.set_parameters(profile=profile)
                 recorder.wait_at_rest()
                 send_and_time(recorder, goal_message(0.0))  # warm up
@@ -351,6 +358,8 @@ def main() -> int:
     parser.add_argument('--json', action='store_true', help='print one JSON object')
     parser.add_argument('--rates', type=float, nargs='+', default=[100.0, 500.0],
                         help='stream rates (Hz) of the reaction rows')
+    parser.add_argument('--profiles', nargs='+', default=list(PROFILES), choices=PROFILES,
+                        help='profiles of the reaction rows')
     parser.add_argument('--reaction-only', action='store_true',
                         help='skip the period, busy and flood rows')
     parser.add_argument('--bare', type=float, help=argparse.SUPPRESS)

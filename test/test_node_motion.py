@@ -78,6 +78,12 @@ def test_goal_moves_named_joints_reaches_and_holds(probe, rest):
     # When DDS received the goal (system clock, as the stamps here): after it was sent,
     # before the motion's first setpoint.
     assert sent_ns <= int(values['received']) <= start_ns
+    # How long it was planned, and how often: once, unless the stream passed the planned
+    # start (a loaded machine); a plan that made its start was ready before it.
+    attempts, planning_time = int(values['attempts']), float(values['planning_time'])
+    assert 1 <= attempts <= 6 and planning_time > 0.0
+    if attempts == 1:
+        assert planning_time < (start_ns - int(values['received'])) * 1e-9
     assert list(trajectory.joint_names) == JOINTS
     assert float(values['duration']) == pytest.approx(times[-1], abs=1e-6)
     assert np.allclose(np.diff(times)[:-1], 1.0 / RATE, atol=1e-9)

@@ -81,10 +81,10 @@ def limit_violation(
         peaks = list(trajectory.peaks_with_jerk())
         limits.append(np.asarray(max_jerk, dtype=float))
         names.append('jerk')
-    ratios = np.stack([peak / limit for peak, limit in zip(peaks, limits, strict=True)])
+    ratios = np.array([peak / limit for peak, limit in zip(peaks, limits, strict=True)])
     if np.count_nonzero(ratios <= 1.0 + LIMIT_TOLERANCE) == ratios.size:
         return None
-    quantity, joint = np.unravel_index(int(np.argmax(ratios)), ratios.shape)
+    quantity, joint = divmod(int(ratios.argmax()), ratios.shape[1])
     return Violation(int(joint), names[quantity], float(peaks[quantity][joint]),
                      float(limits[quantity][joint]))
 

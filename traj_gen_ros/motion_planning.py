@@ -148,7 +148,7 @@ def check_reach(config: Config, start: np.ndarray, points: np.ndarray) -> None:
     the duration limit instead of overflowing inside the solver.
     """
     seconds = np.abs(np.asarray(points, dtype=float) - start) / config.max_velocity
-    worst = np.unravel_index(int(np.argmax(seconds)), np.shape(seconds))
+    worst = divmod(int(seconds.argmax()), seconds.shape[-1])  # (point, joint)
     if seconds[worst] > MAX_DURATION:
         joint = config.joints[worst[-1]]
         raise RequestError(f'joint {joint!r} would need at least {seconds[worst]:.4g} s at '
@@ -157,10 +157,10 @@ def check_reach(config: Config, start: np.ndarray, points: np.ndarray) -> None:
 
 
 def _at_rest_at(state: State, target: np.ndarray, keeps_acceleration: bool) -> bool:
-    still = not np.any(np.abs(state.velocity) > 1e-12)
+    offsets = [state.velocity, state.position - target]
     if keeps_acceleration:
-        still = still and not np.any(np.abs(state.acceleration) > 1e-12)
-    return still and not np.any(np.abs(state.position - target) > 1e-12)
+        offsets.append(state.acceleration)
+    return float(np.abs(np.concatenate(offsets)).max()) <= 1e-12
 
 
 def plan_via(config: Config, state: State, hold_at: np.ndarray,

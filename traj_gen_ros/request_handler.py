@@ -234,6 +234,7 @@ class RequestHandler:
                                                collections.deque(maxlen=RECENT))
         margin_ns = int(statistics.median(recent_ns or self._any_recent_ns))
         start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
+        planning_ns = 0
         for attempt in range(PLAN_ATTEMPTS):
             began = self._elapsed_ns()
             now_ns = self._now_ns()
@@ -252,9 +253,12 @@ class RequestHandler:
                 return None
             elapsed_ns = self._elapsed_ns() - began
             first_ns = self._stream.splice(start_ns, motion)
+            planning_ns += elapsed_ns
             if first_ns is not None:
                 recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
                 self._any_recent_ns.append(recent_ns[-1])
+                request.values['planning_time'] = f'{planning_ns * 1e-9:.6f}'
+                request.values['attempts'] = str(attempt + 1)
                 return motion, now_ns, start_ns, first_ns
             if attempt == 0 and elapsed_ns <= RETRY_PERIODS * config.period_ns:
                 start_ns = max(request.stamp_ns, self._stream.last_published())

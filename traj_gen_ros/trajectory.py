@@ -217,6 +217,35 @@ class JerkLimitedTrajectory(Trajectory):
         """Find the largest ``|velocity|``, ``|acceleration|`` and ``|jerk|`` per joint."""
         return self.peaks_with_jerk()
 
+    def peaks_with_jerk(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """
+        Largest ``|velocity|``, ``|acceleration|`` and ``|jerk|`` per joint, in closed form.
+
+        On a cubic piece ``c0 + c1 t + c2 t² + c3 t³`` of length ``L`` the jerk ``6 c3`` is
+        constant, the acceleration ``2 c2 + 6 c3 t`` is linear (its peak is at an end) and
+        the velocity ``c1 + 2 c2 t + 3 c3 t²`` peaks at an end or where the acceleration
+        is zero, ``t = -c2 / (3 c3)`` inside the piece: exact, and a quarter of the
+        general :meth:`Trajectory.peaks_with_jerk`'s numpy calls (the node checks every
+        S-curve plan with it).
+        """
+        if self.degree != 3:
+            return super().peaks_with_jerk()
+        c1, c2, c3 = self.coefficients[:, 1], self.coefficients[:, 2], self.coefficients[:, 3]
+        lengths = self._piece_durations(self.joint_count)
+        slope = 3.0 * c3
+        end_acceleration = 2.0 * (c2 + slope * lengths)
+        end_velocity = c1 + (2.0 * c2 + slope * lengths) * lengths
+        # The acceleration's zero: a piece with c3 = 0 has none (it is left at t = 0).
+        with np.errstate(divide='ignore', invalid='ignore'):
+            turn = -c2 / slope
+        turn[~((turn > 0.0) & (turn < lengths))] = 0.0
+        turn_velocity = c1 + (2.0 * c2 + slope * turn) * turn
+        velocity = np.maximum(np.maximum(np.abs(c1), np.abs(end_velocity)),
+                              np.abs(turn_velocity))
+        acceleration = np.maximum(np.abs(c2), 0.5 * np.abs(end_acceleration))
+        return (np.maximum.reduce(velocity), 2.0 * np.maximum.reduce(acceleration),
+                6.0 * np.maximum.reduce(np.abs(c3)))
+
 
 def _horner(
     coefficients: np.ndarray, local_time: np.ndarray, degree: int
