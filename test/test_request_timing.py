@@ -139,3 +139,40 @@ def test_a_request_overtaken_every_time_is_refused_with_the_reason(node):
     level, text, _ = rig.statuses[-1]
     assert level == DiagnosticStatus.ERROR and 'passed its start 6 times' in text
     assert rig.state()[1].tolist() == [0.0, 0.0]  # still holding
+
+
+def test_margins_from_rest_and_from_a_moving_state_are_kept_apart(node):
+    # Plans from a moving state take longer than from rest: a slow one must not push the
+    # next from-rest start away, nor a fast one from rest leave a moving start too close.
+    rig = Rig(node)
+    rig.tick()
+
+    def timed_goal(positions, planning_ns):
+        request = parse_goal(JOINTS, JOINTS, positions)
+
+        def planner(config, state, hold_at):
+            rig.clock[0] += planning_ns  # on the fake clock, no tick goes out meanwhile
+            return plan_request(config, state, hold_at, request)
+        now = rig.clock[0]
+        values = rig.answers.values('goal', '', 0)
+        assert rig.handler.execute(Request('goal', values, 0, request), planner) is not None
+        trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
+        return trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec - now
+
+    def until_at_rest():
+        while not np.all(rig.state()[2] == 0.0) or len(rig.states) < 2:
+            rig.tick()
+
+    assert timed_goal([0.1, 0.1], 0) <= PERIOD  # from rest: the next tick
+    for _ in range(3):
+        rig.tick()
+    assert timed_goal([0.3, -0.2], 25_000_000) <= PERIOD  # moving, no history yet
+    for _ in range(3):
+        rig.tick()
+    slow = timed_goal([0.4, -0.3], 25_000_000)  # moving: 25 ms of history
+    assert 25_000_000 <= slow <= 25_000_000 + PERIOD
+    until_at_rest()
+    assert timed_goal([0.0, 0.0], 0) <= PERIOD  # from rest again: its own history, 0
+    for _ in range(3):
+        rig.tick()
+    assert timed_goal([0.2, 0.2], 0) >= 25_000_000  # moving: the moving plans' median

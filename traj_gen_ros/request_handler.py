@@ -21,7 +21,8 @@ Sampling comes after the splice so that it does not delay the start: a plan that
 the splice has finite coefficients and finite, checked peaks, so its samples are finite.
 
 The start tick is the first one at least the median planning time of the last requests
-away (so the plan is usually ready by then). If the stream published it while the request
+alike (kind, profile, and from rest or a moving state) away (so the plan is usually ready
+by then). If the stream published it while the request
 was being planned anyway (a cold cache, a long path, a loaded machine), the request is
 planned again from the setpoint the stream published last, exactly as published, and
 takes over at the next tick if ready by then: one period later, not a re-plan far ahead.
@@ -69,7 +70,8 @@ REQUEST_DEPTH = 1000
 #: and the stream keeps its rate. A request after a quiet spell is not delayed.
 REQUEST_ROUND_PERIOD = 0.005
 #: A new motion starts at the first tick at least the median planning time of the last
-#: RECENT requests of its kind and profile away, so that it is ready by then (a few
+#: RECENT requests of its kind and profile, from rest or from a moving state as this one
+#: (several times longer), away, so that it is ready by then (a few
 #: hundred us: most often the very next tick). One whose start tick the stream published
 #: while it was planned is planned again from the last published setpoint (to take over at
 #: the next tick) if it took at most RETRY_PERIODS periods; else, and after that, from a
@@ -111,8 +113,9 @@ class RequestHandler:
         self._last_round = 0.0  # time.monotonic() at the end of the last request callback
         # Requests come from the request thread and ~/stop from the executor: one at a time.
         self._lock = threading.Lock()
-        # How long the last requests of each (kind, profile), and of any, took to plan (ns).
-        self._recent_ns: dict[tuple[str, str], collections.deque[int]] = {}
+        # How long the last requests of each (kind, profile, from a moving state), and of
+        # any, took to plan (ns).
+        self._recent_ns: dict[tuple[str, str, bool], collections.deque[int]] = {}
         self._any_recent_ns: collections.deque[int] = collections.deque([0], maxlen=RECENT)
 
     # ------------------------------------------------------------------ take and parse
@@ -230,7 +233,10 @@ class RequestHandler:
         took over ``RETRY_PERIODS`` periods (a long path); then, and after a second miss,
         from a tick at least twice the last attempt's time and twice the last margin away.
         """
-        recent_ns = self._recent_ns.setdefault((request.kind, config.profile),
+        # Plans from rest are closed forms; from a moving state they take several times
+        # longer: each has its own history.
+        moving = self._stream.moving_at(self._stream.next_start())
+        recent_ns = self._recent_ns.setdefault((request.kind, config.profile, moving),
                                                collections.deque(maxlen=RECENT))
         margin_ns = int(statistics.median(recent_ns or self._any_recent_ns))
         start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))

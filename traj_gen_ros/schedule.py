@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 from traj_gen_ros.motion_planning import PlannedMotion, State
+from traj_gen_ros.trajectory import state_at
 
 #: "Since forever": the start of the first motion (ns).
 BEGINNING_NS = -(2 ** 62)
@@ -40,8 +41,12 @@ class Schedule:
         if elapsed >= motion.plan.duration:
             zeros = np.zeros_like(motion.end)
             return State(motion.end.copy(), zeros, zeros.copy())
-        position, velocity, acceleration = motion.plan.sample(max(elapsed, 0.0))
-        return State(position[0], velocity[0], acceleration[0])
+        return State(*state_at(motion.plan, elapsed))
+
+    def moving_at(self, time_ns: int) -> bool:
+        """Tell whether a motion is still under way at ``time_ns`` (not yet at its end)."""
+        start, motion = self._segment(time_ns)
+        return (time_ns - start) * 1e-9 < motion.plan.duration
 
     def end_position(self, before_ns: int) -> np.ndarray:
         """Where the schedule rests (rad) if nothing starting at or after ``before_ns`` runs."""

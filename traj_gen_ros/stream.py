@@ -149,6 +149,11 @@ class Stream:
         with self._lock:
             return self._schedule.state_at(time_ns), self._schedule.end_position(time_ns)
 
+    def moving_at(self, time_ns: int) -> bool:
+        """Tell whether the schedule is in motion at ``time_ns`` (a plan not yet at its end)."""
+        with self._lock:
+            return self._schedule.moving_at(time_ns)
+
     def last_published(self) -> int:
         """
         Return when the last setpoint was sampled (ns): a start that nothing published follows.

@@ -247,6 +247,50 @@ class JerkLimitedTrajectory(Trajectory):
                 6.0 * np.maximum.reduce(np.abs(c3)))
 
 
+def state_at(trajectory: Trajectory, time: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """
+    Position, velocity and acceleration at one ``time`` (s, clipped to the plan), ``(joints,)``.
+
+    The stream's path: a setpoint every tick, and the start state of every new plan. The
+    same polynomials as :meth:`Trajectory.sample` (the same piece at a breakpoint: the one
+    starting there), evaluated as the pieces' coefficients times the powers ``τᵏ`` of local
+    time and their derivatives ``k τᵏ⁻¹``, ``k (k - 1) τᵏ⁻²``: a handful of numpy calls
+    instead of Horner's rule's three dozen. Agrees with :meth:`Trajectory.sample` to
+    rounding (the sums run in another order).
+    """
+    time = min(max(float(time), 0.0), trajectory.duration)
+    breakpoints, coefficients = trajectory.breakpoints, trajectory.coefficients
+    size = coefficients.shape[1]
+    if breakpoints.ndim == 1:
+        piece = int(np.searchsorted(breakpoints[1:-1], time, side='right'))
+        local = time - float(breakpoints[piece])
+        powers = [1.0]
+        for _ in range(size - 1):
+            powers.append(powers[-1] * local)
+        rows = np.zeros((3, size))
+        rows[0] = powers
+        rows[1, 1:] = _ORDERS[1:size] * powers[:-1]
+        rows[2, 2:] = _SECOND_ORDERS[2:size] * powers[:-2]
+        state = rows @ coefficients[piece]
+        return state[0], state[1], state[2]
+    joints = np.arange(trajectory.joint_count)
+    piece = np.count_nonzero(breakpoints[1:-1] <= time, axis=0)
+    local = time - breakpoints[piece, joints]
+    gathered = coefficients[piece, :, joints].T  # (size, joints)
+    powers = np.empty((size, joints.size))
+    powers[0] = 1.0
+    powers[1:] = local
+    np.multiply.accumulate(powers, axis=0, out=powers)
+    position = np.add.reduce(gathered * powers)
+    velocity = np.add.reduce(gathered[1:] * _ORDERS[1:size, None] * powers[:-1])
+    acceleration = np.add.reduce(gathered[2:] * _SECOND_ORDERS[2:size, None] * powers[:-2])
+    return position, velocity, acceleration
+
+
+_ORDERS = np.arange(8.0)  # d/dτ τᵏ = k τᵏ⁻¹
+_SECOND_ORDERS = _ORDERS * (_ORDERS - 1.0)  # d²/dτ² τᵏ = k (k - 1) τᵏ⁻²
+
+
 def _horner(
     coefficients: np.ndarray, local_time: np.ndarray, degree: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
