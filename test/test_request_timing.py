@@ -176,3 +176,28 @@ def test_margins_from_rest_and_from_a_moving_state_are_kept_apart(node):
     for _ in range(3):
         rig.tick()
     assert timed_goal([0.2, 0.2], 0) >= 25_000_000  # moving: the moving plans' median
+
+
+def test_after_a_warm_miss_the_next_attempt_starts_one_attempt_away(node):
+    # Two attempts overtaken, each while one tick goes out (a period of planning): the
+    # third starts at the first tick that far away, not twice as far.
+    rig = Rig(node)
+    rig.tick()
+    goal(rig, [0.5, -0.2], planning_ticks=0)  # a moving arm
+    for _ in range(5):
+        rig.tick()
+    request = parse_goal(JOINTS, JOINTS, [-0.3, 0.4])
+    calls = []
+
+    def overtaken_twice(config, state, hold_at):
+        calls.append(rig.clock[0])
+        if len(calls) <= 2:
+            rig.tick(late=30_000)
+        return plan_request(config, state, hold_at, request)
+    values = rig.answers.values('goal', '', 0)
+    assert rig.handler.execute(Request('goal', values, 0, request), overtaken_twice)
+    assert len(calls) == 3
+    trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
+    start = trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec
+    second_attempt = calls[2] - calls[1]  # how long the (warm) second attempt took
+    assert second_attempt <= start - calls[2] <= second_attempt + PERIOD

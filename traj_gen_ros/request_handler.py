@@ -71,17 +71,21 @@ REQUEST_DEPTH = 1000
 REQUEST_ROUND_PERIOD = 0.005
 #: A new motion starts at the first tick at least the median planning time of the last
 #: RECENT requests of its kind and profile, from rest or from a moving state as this one
-#: (several times longer), away, so that it is ready by then (a few
-#: hundred us: most often the very next tick). One whose start tick the stream published
-#: while it was planned is planned again from the last published setpoint (to take over at
-#: the next tick) if it took at most RETRY_PERIODS periods; else, and after that, from a
-#: tick further away: twice the time the attempt took, and at least twice the margin
-#: before (a loaded machine whose planning times vary widely is caught up with), at most
-#: PLAN_ATTEMPTS times in all. Margins are capped at MAX_MARGIN_NS.
+#: (several times longer), away, so that it is ready by then (a few hundred us: most
+#: often the very next tick; with no such request yet, the slowest RECENT of any kind).
+#: One whose start tick the stream published while it was planned is planned again, the
+#: first QUICK_RETRIES times if the attempt took at most RETRY_PERIODS periods: from the
+#: last published setpoint (to take over at the next tick), the second time only when the
+#: next tick is at least the (warm) attempt's time away, else from the first tick that
+#: is. Else, and after that,
+#: from a tick further away: twice the time the attempt took, and at least twice the
+#: margin before (a loaded machine whose planning times vary widely is caught up with),
+#: at most PLAN_ATTEMPTS times in all. Margins are capped at MAX_MARGIN_NS.
 RECENT = 5
 MAX_MARGIN_NS = 500_000_000
 PLAN_ATTEMPTS = 6
 RETRY_PERIODS = 2
+QUICK_RETRIES = 2
 #: The OK status waits at most this long (s) for the motion's first setpoint.
 ANSWER_WAIT = 0.1
 
@@ -228,17 +232,21 @@ class RequestHandler:
         Return the motion spliced in, when it was planned, its start and first tick (ns).
 
         First from the tick at least the recent median planning time away. If the stream
-        published it meanwhile: again from the setpoint it published last (a re-plan is
-        faster than a cold first one: usually ready for the next tick), unless planning
-        took over ``RETRY_PERIODS`` periods (a long path); then, and after a second miss,
-        from a tick at least twice the last attempt's time and twice the last margin away.
+        published it meanwhile, up to ``QUICK_RETRIES`` times: again from the setpoint it
+        published last (a re-plan is faster than a cold first one: usually ready for the
+        next tick; after a warm miss, only if the next tick is that attempt's time away,
+        else from the first tick that is), unless planning took over ``RETRY_PERIODS``
+        periods (a long path); then,
+        and after that, from a tick at least twice the last attempt's time and twice the
+        last margin away.
         """
         # Plans from rest are closed forms; from a moving state they take several times
         # longer: each has its own history.
         moving = self._stream.moving_at(self._stream.next_start())
         recent_ns = self._recent_ns.setdefault((request.kind, config.profile, moving),
                                                collections.deque(maxlen=RECENT))
-        margin_ns = int(statistics.median(recent_ns or self._any_recent_ns))
+        # Nothing alike yet (the first preempting goal, say): the slowest of any kind.
+        margin_ns = int(statistics.median(recent_ns) if recent_ns else max(self._any_recent_ns))
         start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
         planning_ns = 0
         for attempt in range(PLAN_ATTEMPTS):
@@ -266,8 +274,14 @@ class RequestHandler:
                 request.values['planning_time'] = f'{planning_ns * 1e-9:.6f}'
                 request.values['attempts'] = str(attempt + 1)
                 return motion, now_ns, start_ns, first_ns
-            if attempt == 0 and elapsed_ns <= RETRY_PERIODS * config.period_ns:
+            quick = attempt < QUICK_RETRIES and elapsed_ns <= RETRY_PERIODS * config.period_ns
+            if quick and attempt == 0:  # a warm re-plan is faster than this cold attempt
                 start_ns = max(request.stamp_ns, self._stream.last_published())
+            elif quick:  # this one was warm: the next takes about as long
+                if self._stream.next_start() - self._now_ns() >= elapsed_ns:
+                    start_ns = max(request.stamp_ns, self._stream.last_published())
+                else:
+                    start_ns = max(request.stamp_ns, self._stream.next_start(elapsed_ns))
             else:
                 margin_ns = min(max(2 * elapsed_ns, 2 * margin_ns), MAX_MARGIN_NS)
                 start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
