@@ -27,9 +27,11 @@ def _agrees(plan, times):
             np.testing.assert_allclose(ours, theirs[0], rtol=1e-12, atol=1e-13)
 
 
+FRACTIONS = st.lists(st.floats(-0.1, 1.1), min_size=5, max_size=5)
+
+
 @settings(max_examples=60, deadline=None)
-@given(start=row, goal=row, velocity=row, fractions=st.lists(st.floats(-0.1, 1.1), min_size=5,
-                                                            max_size=5))
+@given(start=row, goal=row, velocity=row, fractions=FRACTIONS)
 def test_state_at_equals_sample_for_every_profile(start, goal, velocity, fractions):
     max_velocity, max_acceleration, max_jerk = LIMITS
     towards = 0.3 * np.sign(goal - start) * np.abs(velocity) * max_velocity
