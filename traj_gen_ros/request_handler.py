@@ -22,8 +22,8 @@ the splice has finite coefficients and finite, checked peaks, so its samples are
 
 The start tick is the first one at least the median planning time of the last requests
 alike (kind, profile, and from rest or a moving state) away (so the plan is usually ready
-by then). If the stream published it while the request
-was being planned anyway (a cold cache, a long path, a loaded machine), the request is
+by then). If the stream published it while the request was being planned anyway (a cold
+cache, a long path, a loaded machine), the request is
 planned again from the setpoint the stream published last, exactly as published, and
 takes over at the next tick if ready by then: one period later, not a re-plan far ahead.
 After ``PLAN_ATTEMPTS`` such misses it is refused.
@@ -77,10 +77,10 @@ REQUEST_ROUND_PERIOD = 0.005
 #: first QUICK_RETRIES times if the attempt took at most RETRY_PERIODS periods: from the
 #: last published setpoint (to take over at the next tick), the second time only when the
 #: next tick is at least the (warm) attempt's time away, else from the first tick that
-#: is. Else, and after that,
-#: from a tick further away: twice the time the attempt took, and at least twice the
-#: margin before (a loaded machine whose planning times vary widely is caught up with),
-#: at most PLAN_ATTEMPTS times in all. Margins are capped at MAX_MARGIN_NS.
+#: is. Else, and after that, from a tick further away: twice the time the attempt took,
+#: and at least twice the margin before (a loaded machine whose planning times vary
+#: widely is caught up with), at most PLAN_ATTEMPTS times in all. Margins are capped at
+#: MAX_MARGIN_NS.
 RECENT = 5
 MAX_MARGIN_NS = 500_000_000
 PLAN_ATTEMPTS = 6
@@ -236,9 +236,8 @@ class RequestHandler:
         published last (a re-plan is faster than a cold first one: usually ready for the
         next tick; after a warm miss, only if the next tick is that attempt's time away,
         else from the first tick that is), unless planning took over ``RETRY_PERIODS``
-        periods (a long path); then,
-        and after that, from a tick at least twice the last attempt's time and twice the
-        last margin away.
+        periods (a long path); then, and after that, from a tick at least twice the last
+        attempt's time and twice the last margin away.
         """
         # Plans from rest are closed forms; from a moving state they take several times
         # longer: each has its own history.
