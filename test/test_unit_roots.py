@@ -3,6 +3,9 @@
 import numpy as np
 import numpy.polynomial.polynomial as poly
 import pytest
+import traj_gen_ros as tg
+from traj_gen_ros import unit_roots
+from traj_gen_ros.trajectory import state_at
 from traj_gen_ros.unit_roots import quadratic_roots_in_unit_interval, roots_in_unit_interval
 
 
@@ -50,6 +53,36 @@ def test_hard_roots_are_found(roots):
     for root in roots:
         assert np.min(np.abs(found - root)) <= 1e-5
     assert np.all((found >= 0.0) & (found <= 1.0))
+
+
+def _no_eigenvalues(polynomials):
+    raise AssertionError(f'eigenvalues asked for {len(polynomials)} polynomials')
+
+
+@pytest.mark.parametrize('gap', [1e-3, 1e-4, 2e-5])
+def test_close_pairs_are_isolated_by_splitting_without_eigenvalues(gap, monkeypatch):
+    # Parts down to 1/131072 (7.6e-6) of [0, 1]: pairs this close are separated by them.
+    monkeypatch.setattr(unit_roots, '_eigenvalue_roots', _no_eigenvalues)
+    expected = [0.2113, 0.2113 + gap, 0.7887 - gap, 0.7887]
+    rows = np.array([from_roots(expected + [1.7]), from_roots(expected[:2] + [-2.0])])
+    found = roots_of(2, roots_in_unit_interval(rows))
+    np.testing.assert_allclose(found[0], expected, rtol=0.0, atol=1e-9)
+    np.testing.assert_allclose(found[1], expected[:2], rtol=0.0, atol=1e-9)
+
+
+def test_a_goal_soon_after_a_start_from_rest_needs_no_eigenvalues(monkeypatch):
+    # 0.02-0.2 s into a 3.7 s quintic from rest the quintic's acceleration resultant has
+    # near-double roots near (3 ± √3)/6, 1.3e-5 to 1.1e-3 apart.
+    joints = 6
+    limits = np.full(joints, 0.5), np.full(joints, 2.0)
+    first = tg.min_time(np.zeros(joints), np.ones(joints), *limits, 'quintic')
+    monkeypatch.setattr(unit_roots, '_eigenvalue_roots', _no_eigenvalues)
+    for time in (0.02, 0.05, 0.1, 0.2):
+        position, velocity, acceleration = state_at(first, time)
+        plan = tg.min_time(position, -np.ones(joints), *limits, 'quintic', v0=velocity,
+                           a0=acceleration)
+        peak_velocity = np.abs(plan.sample(np.linspace(0.0, plan.duration, 4001))[1]).max()
+        assert 0.5 * (1.0 - 1e-6) <= peak_velocity <= 0.5 * (1.0 + 1e-9)
 
 
 def test_polynomials_without_roots_in_the_interval_give_none():
