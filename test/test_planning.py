@@ -6,7 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 import numpy as np
 import pytest
-from rclpy.serialization import serialize_message
+from rclpy.serialization import deserialize_message, serialize_message
+from sensor_msgs.msg import JointState
 from traj_gen_ros import limit_violation, min_time, scurve_brake
 from traj_gen_ros.motion_planning import (
     held,
@@ -23,6 +24,7 @@ from traj_gen_ros.request_parsing import (
     parse_goal,
     parse_via,
     peek_via_points,
+    read_goal,
     RequestError,
 )
 from traj_gen_ros.schedule import Schedule
@@ -219,6 +221,33 @@ def test_peek_via_points_reads_frame_id_and_count_off_the_wire():
     data = serialize_message(message)
     assert peek_via_points(data) == ('tag-17', 7)
     assert peek_via_points(data[:12]) == ('', 0)  # truncated: deserialising refuses it
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.text(max_size=12), st.lists(st.text(max_size=9), max_size=7),
+       st.lists(st.floats(allow_nan=True, allow_infinity=True), max_size=7),
+       st.lists(st.floats(-10.0, 10.0), max_size=3), st.integers(0, 2 ** 31 - 1))
+def test_read_goal_reads_what_rclpy_serialises(frame_id, names, positions, velocities, sec):
+    message = JointState(name=names, position=positions, velocity=velocities)
+    message.header.frame_id = frame_id
+    message.header.stamp.sec = sec
+    data = serialize_message(message)
+    expected = deserialize_message(data, JointState)  # rclpy's own reading ('a\0b' is 'a')
+    read_frame, read_names, read_positions = read_goal(data)
+    assert (read_frame, read_names) == (expected.header.frame_id, list(expected.name))
+    np.testing.assert_array_equal(read_positions, np.array(expected.position, dtype=float))
+    assert read_positions.dtype == np.float64 and read_positions.flags.writeable
+
+
+def test_read_goal_leaves_what_it_cannot_read_to_rclpy():
+    message = JointState(name=['a', 'b'], position=[1.0, 2.0])
+    data = serialize_message(message)
+    assert read_goal(data[:-24]) is None  # cut inside the positions
+    assert read_goal(data[:14]) is None  # cut inside a name
+    assert read_goal(b'\x00\x00' + data[2:]) is None  # big-endian CDR: rclpy reads it
+    corrupt = bytearray(data)
+    corrupt[20:22] = b'\xff\xfe'  # not UTF-8 inside the first name
+    assert read_goal(bytes(corrupt)) is None
 
 
 def test_limit_refusals_name_joints_by_their_ros_names():

@@ -98,10 +98,12 @@ class TrajectoryGenerator(Node):
                                         self._now_ns, self.get_logger().error)
         # Served by the request thread, not the executor (request_thread).
         requests_only = NotForTheExecutor()
+        # Raw: a goal's names and positions are read off the wire (microseconds, against
+        # tens for an rclpy message), and a via request's point count, so a huge message is
+        # refused without building one Python object per point.
         self._goal_subscription = self.create_subscription(
-            JointState, '~/goal', self._on_goal, REQUEST_DEPTH, callback_group=requests_only)
-        # Raw: the point count is read off the wire first, so a huge message is refused
-        # without building one Python object per point.
+            JointState, '~/goal', self._on_goal, REQUEST_DEPTH, raw=True,
+            callback_group=requests_only)
         self._via_subscription = self.create_subscription(
             JointTrajectory, '~/via_points', self._on_via_points, REQUEST_DEPTH, raw=True,
             callback_group=requests_only)
@@ -122,11 +124,11 @@ class TrajectoryGenerator(Node):
 
     # ------------------------------------------------------------------ requests
 
-    def _on_goal(self, message: JointState, info: dict) -> None:
-        self._requests.take(self._goal_subscription, JointState, False, (message, info))
+    def _on_goal(self, data: bytes, info: dict) -> None:
+        self._requests.take(self._goal_subscription, JointState, (data, info))
 
     def _on_via_points(self, data: bytes, info: dict) -> None:
-        self._requests.take(self._via_subscription, JointTrajectory, True, (data, info))
+        self._requests.take(self._via_subscription, JointTrajectory, (data, info))
 
     def _on_stop(self, request: Trigger.Request, response: Trigger.Response
                  ) -> Trigger.Response:

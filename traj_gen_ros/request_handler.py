@@ -57,6 +57,7 @@ from traj_gen_ros.request_parsing import (
     parse_goal,
     parse_via,
     peek_via_points,
+    read_goal,
     RequestError,
     too_many_points,
 )
@@ -124,29 +125,31 @@ class RequestHandler:
 
     # ------------------------------------------------------------------ take and parse
 
-    def take(self, subscription: Subscription, message_type: type, raw: bool,
-             first: tuple[object, dict]) -> None:
+    def take(self, subscription: Subscription, message_type: type,
+             first: tuple[bytes, dict]) -> None:
         """
         Parse ``first`` and every request waiting behind it; execute the newest valid one.
 
-        Each is a ``(message, message info)`` pair; the info's ``received_timestamp`` (ns,
-        system clock: when DDS received it) goes into the answer as ``received``.
+        Each is a ``(serialised message, message info)`` pair (the subscriptions are raw:
+        goals are read off the wire, via points counted before they are deserialised); the
+        info's ``received_timestamp`` (ns, system clock: when DDS received it) goes into
+        the answer as ``received``.
         """
-        parse = self._parse_via if raw else self._parse_goal
+        parse = self._parse_via if message_type is JointTrajectory else self._parse_goal
         try:
             with self._lock:
-                self._take_newest(subscription, message_type, raw, first, parse)
+                self._take_newest(subscription, message_type, first, parse)
         finally:
             self._pace()
 
-    def _take_newest(self, subscription: Subscription, message_type: type, raw: bool,
-                     first: tuple[object, dict],
-                     parse: Callable[[object, int], Request | None]) -> None:
+    def _take_newest(self, subscription: Subscription, message_type: type,
+                     first: tuple[bytes, dict],
+                     parse: Callable[[bytes, int], Request | None]) -> None:
         """Drain the subscription after ``first``; execute the newest valid request."""
         waiting = [first]
         with subscription.handle:
             for _ in range(REQUEST_DEPTH):
-                taken = subscription.handle.take_message(message_type, raw)
+                taken = subscription.handle.take_message(message_type, True)
                 if taken is None:
                     break
                 waiting.append(taken)
@@ -166,11 +169,21 @@ class RequestHandler:
             time.sleep(rest)
         self._last_round = time.monotonic()
 
-    def _parse_goal(self, message: JointState, received: int) -> Request | None:
-        request = Request('goal', self._answers.values('goal', message.header.frame_id,
-                                                       received), 0, None)
+    def _parse_goal(self, data: bytes, received: int) -> Request | None:
+        fields = read_goal(data)
+        if fields is None:  # not the usual little-endian CDR: let rclpy read it
+            try:
+                message = deserialize_message(data, JointState)
+            except Exception as error:  # noqa: BLE001 - wire bytes must never kill the node
+                values = self._answers.values('goal', '', received)
+                self._answers.refused(Request('goal', values, 0, None),
+                                      f'malformed message: {error}')
+                return None
+            fields = message.header.frame_id, message.name, message.position
+        frame_id, names, positions = fields
+        request = Request('goal', self._answers.values('goal', frame_id, received), 0, None)
         try:
-            request.request = parse_goal(self._config().joints, message.name, message.position)
+            request.request = parse_goal(self._config().joints, names, positions)
         except RequestError as error:
             self._answers.refused(request, str(error))
             return None
