@@ -9,6 +9,8 @@ exactly as published, and takes over at the next tick; ``~/trajectory`` is the p
 that setpoint (its start and first point).
 """
 
+import threading
+
 from diagnostic_msgs.msg import DiagnosticStatus
 from node_harness import in_process_node  # also isolates the DDS domain
 import numpy as np
@@ -18,7 +20,7 @@ from sensor_msgs.msg import JointState
 from traj_gen_ros.answers import Answers, Request
 from traj_gen_ros.motion_planning import held, plan_request
 from traj_gen_ros.node_config import make_config
-from traj_gen_ros.request_handler import MAX_MARGIN_NS, RequestHandler
+from traj_gen_ros.request_handler import MAX_MARGIN_NS, RequestHandler, SAMPLE_AFTER_FIRST_NS
 from traj_gen_ros.request_parsing import parse_goal
 from traj_gen_ros.stream import Stream
 from trajectory_msgs.msg import JointTrajectory
@@ -201,3 +203,38 @@ def test_after_a_warm_miss_the_next_attempt_starts_one_attempt_away(node):
     start = trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec
     second_attempt = calls[2] - calls[1]  # how long the (warm) second attempt took
     assert second_attempt <= start - calls[2] <= second_attempt + PERIOD
+
+
+@pytest.mark.parametrize('due', [SAMPLE_AFTER_FIRST_NS // 2, 4 * SAMPLE_AFTER_FIRST_NS])
+def test_trajectory_is_sampled_after_a_first_setpoint_that_is_due_soon(node, due):
+    # Sampling holds the GIL: a first setpoint due within SAMPLE_AFTER_FIRST_NS goes out
+    # before ~/trajectory is sampled; one due later is not waited for.
+    rig = Rig(node)
+    rig.tick()
+    rig.clock[0] = rig.stream.next_start() - due
+    request = parse_goal(JOINTS, JOINTS, [0.5, -0.2])
+    waiting = threading.Event()
+    wait_published = rig.stream.wait_published
+
+    def waits(time_ns, timeout):
+        waiting.set()
+        return wait_published(time_ns, timeout)
+    rig.stream.wait_published = waits
+    trajectories_at_tick = []
+
+    def publish_the_tick_when_waited_for():
+        if waiting.wait(5.0):
+            trajectories_at_tick.append(len(rig.trajectories))
+            rig.tick()
+    ticker = threading.Thread(target=publish_the_tick_when_waited_for)
+    ticker.start()
+    values = rig.answers.values('goal', '', 0)
+    try:
+        motion = rig.handler.execute(Request('goal', values, 0, request),
+                                     lambda config, state, hold_at:
+                                     plan_request(config, state, hold_at, request))
+    finally:
+        ticker.join(5.0)
+    assert motion is not None and rig.statuses[-1][0] == DiagnosticStatus.OK
+    assert trajectories_at_tick == [0 if due <= SAMPLE_AFTER_FIRST_NS else 1]
+    assert len(rig.trajectories) == 1

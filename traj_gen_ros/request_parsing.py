@@ -161,13 +161,17 @@ def too_many_points(count: int) -> str:
             'path into several requests')
 
 
-def _string(data: bytes, offset: int) -> tuple[str, int]:
-    """Read the CDR string at ``offset`` (from the end of the encapsulation header)."""
+def _string(data: bytes, offset: int, errors: str = 'strict') -> tuple[str, int]:
+    """
+    Read the CDR string at ``offset`` (from the end of the encapsulation header).
+
+    Returns it (UTF-8, decoded with ``errors``) and the offset after it.
+    """
     offset = (offset + 3) & ~3
     (length,) = struct.unpack_from('<I', data, 4 + offset)
     if 4 + offset + 4 + length > len(data):
         raise ValueError('string runs past the end of the message')
-    text = data[4 + offset + 4:4 + offset + 4 + max(length - 1, 0)].decode()
+    text = data[4 + offset + 4:4 + offset + 4 + max(length - 1, 0)].decode('utf-8', errors)
     return text, offset + 4 + length
 
 
@@ -216,10 +220,10 @@ def peek_via_points(data: bytes) -> tuple[str, int]:
     A message too short to hold them gives ``('', 0)``: deserialising it then refuses it.
     """
     try:
-        frame_id, offset = _string(data, 8)
+        frame_id, offset = _string(data, 8, 'replace')
         names, offset = _count(data, offset)
         for _ in range(names):
-            offset = _string(data, offset)[1]
+            offset = _string(data, offset, 'replace')[1]
         count = _count(data, offset)[0]
     except (ValueError, struct.error):
         return '', 0
