@@ -119,8 +119,9 @@ def _classify(coefficients: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     positive = coefficients > _MARGIN
     clear = np.logical_and.reduce(positive | (coefficients < -_MARGIN))
-    changes = np.add.reduce(positive[1:] != positive[:-1])
-    return (clear & (changes == 1)).nonzero()[0], (~clear | (changes > 1)).nonzero()[0]
+    # Sign changes of a clear piece; 2 (unresolved) for one with a coefficient near 0.
+    changes = np.where(clear, np.add.reduce(positive[1:] != positive[:-1]), 2)
+    return (changes == 1).nonzero()[0], (changes > 1).nonzero()[0]
 
 
 def roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -177,9 +178,9 @@ def column_roots(polynomials: np.ndarray,
     else:
         roots_of, at, bernstein = (np.concatenate(part, axis=-1) for part in
                                    zip(*((a, b, d) for a, b, _, d in found), strict=True))
-        widths = np.concatenate([np.full(part[0].size, part[2]) for part in found])
-    roots = _newton(_with_slopes(normalised)[:, :, roots_of], at, widths, bernstein,
-                    last_step)
+        widths = np.repeat([part[2] for part in found], [part[0].size for part in found])
+    pairs = (_with_slopes(size) @ normalised[:, roots_of]).reshape(2, size, -1)
+    roots = _newton(pairs, at, widths, bernstein, last_step)
     if owners.size:
         hard = np.bincount(owners, minlength=count).nonzero()[0]
         easy = np.bincount(hard, minlength=count)[roots_of] == 0
@@ -197,14 +198,18 @@ def ascending_powers(points: np.ndarray, size: int) -> np.ndarray:
     return np.multiply.accumulate(table, axis=0, out=table)
 
 
-def _with_slopes(columns: np.ndarray) -> np.ndarray:
-    """``(2, size, count)``: the polynomial columns and their derivatives (padded with 0)."""
-    size = columns.shape[0]
-    pair = np.empty((2,) + columns.shape)
-    pair[0] = columns
-    np.multiply(columns[1:], _ORDERS[1:size, None], out=pair[1, :-1])
-    pair[1, -1] = 0.0
-    return pair
+@functools.cache
+def _with_slopes(size: int) -> np.ndarray:
+    """
+    ``(2·size, size)``: ascending coefficients (columns) → themselves, then their derivative.
+
+    The product with polynomials stored as columns, reshaped to ``(2, size, count)``, holds
+    each polynomial and its derivative (padded with 0), as :func:`_newton` takes them.
+    """
+    matrix = np.zeros((2 * size, size))
+    matrix[:size] = np.eye(size)
+    matrix[size + np.arange(size - 1), np.arange(1, size)] = _ORDERS[1:size]
+    return matrix
 
 
 def quadratic_roots_in_unit_interval(polynomials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -244,7 +249,9 @@ def _newton(pair: np.ndarray, starts: np.ndarray, widths: np.ndarray | float,
     size = pair.shape[1]
     # Start where the control polygon (the Bernstein coefficients at k/(size - 1)) crosses
     # zero: its one sign change, between coefficients k and k + 1, where k + 1 is the
-    # number of coefficients with the first one's sign.
+    # number of coefficients with the first one's sign. (The chord between the part's ends
+    # is cheaper but a worse start: Newton's method left the part from it in 40 % of
+    # random plans.)
     positive = bernstein > 0.0
     change = np.add.reduce(positive)
     change = np.where(positive[0], change - 1, size - 1 - change)
