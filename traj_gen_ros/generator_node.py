@@ -37,6 +37,7 @@ import gc
 import signal
 import sys
 import threading
+import time
 
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
@@ -87,6 +88,7 @@ class TrajectoryGenerator(Node):
         joint_states = self.create_publisher(
             JointState, 'joint_states',
             QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+        self._node_clock = self.get_clock()  # ROS time: use_sim_time makes it follow /clock
         self._rate_meter = RateMeter(self._now_ns() * 1e-9)  # for /diagnostics
         self._stream = Stream(held(initial), self._config.joints, self._now_ns,
                               lambda: self._config.period_ns,
@@ -136,7 +138,17 @@ class TrajectoryGenerator(Node):
         return self._requests.stop(response)
 
     def _now_ns(self) -> int:
-        return self.get_clock().now().nanoseconds
+        """
+        Read the node clock (ns): ROS time, the system time unless ``/clock`` drives it.
+
+        The stream reads it several times a tick and a request several times: without sim
+        time, ``time.time_ns()`` (the same ``CLOCK_REALTIME``) costs 0.1 µs and checking
+        that costs 1.5, against 4.8 µs for ``Clock.now()`` (each holding the GIL).
+        """
+        clock = self._node_clock
+        if clock.ros_time_is_active:
+            return clock.now().nanoseconds
+        return time.time_ns()
 
     # ------------------------------------------------------------------ parameters
 
