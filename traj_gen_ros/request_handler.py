@@ -34,7 +34,7 @@ After ``PLAN_ATTEMPTS`` such misses it is refused.
 from __future__ import annotations
 
 import collections
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 import statistics
 import threading
 import time
@@ -142,7 +142,7 @@ class RequestHandler:
         info's ``received_timestamp`` (ns, system clock: when DDS received it) goes into
         the answer as ``received``.
         """
-        parse = self._parse_via if message_type is JointTrajectory else self._parse_goal
+        parse = via_request if message_type is JointTrajectory else goal_request
         try:
             with self._lock:
                 self._take_newest(subscription, message_type, first, parse)
@@ -151,7 +151,8 @@ class RequestHandler:
 
     def _take_newest(self, subscription: Subscription, message_type: type,
                      first: tuple[bytes, dict],
-                     parse: Callable[[bytes, int], Request | None]) -> None:
+                     parse: Callable[[bytes, int, Sequence[str], Answers], Request | None]
+                     ) -> None:
         """Drain the subscription after ``first``; execute the newest valid request."""
         waiting = [first]
         with subscription.handle:
@@ -160,7 +161,8 @@ class RequestHandler:
                 if taken is None:
                     break
                 waiting.append(taken)
-        parsed = [parse(message, info.get('received_timestamp', 0))
+        joints = self._config().joints
+        parsed = [parse(message, info.get('received_timestamp', 0), joints, self._answers)
                   for message, info in waiting]
         parsed = [request for request in parsed if request is not None]
         if parsed:
@@ -175,50 +177,6 @@ class RequestHandler:
         if rest > 0.0:
             time.sleep(rest)
         self._last_round = time.monotonic()
-
-    def _parse_goal(self, data: bytes, received: int) -> Request | None:
-        fields = read_goal(data)
-        if fields is None:  # not the usual little-endian CDR: let rclpy read it
-            try:
-                message = deserialize_message(data, JointState)
-            except Exception as error:  # noqa: BLE001 - wire bytes must never kill the node
-                values = self._answers.values('goal', '', received)
-                self._answers.refused(Request('goal', values, 0, None),
-                                      f'malformed message: {error}')
-                return None
-            fields = message.header.frame_id, message.name, message.position
-        frame_id, names, positions = fields
-        request = Request('goal', self._answers.values('goal', frame_id, received), 0, None)
-        try:
-            request.request = parse_goal(self._config().joints, names, positions)
-        except RequestError as error:
-            self._answers.refused(request, str(error))
-            return None
-        return request
-
-    def _parse_via(self, data: bytes, received: int) -> Request | None:
-        frame_id, count = peek_via_points(data)
-        values = self._answers.values('via_points', frame_id, received)
-        if count > MAX_VIA_POINTS:  # refused before one Python object per point is made
-            self._answers.refused(Request('via_points', values, 0, None), too_many_points(count))
-            return None
-        try:
-            message = deserialize_message(data, JointTrajectory)
-        except Exception as error:  # noqa: BLE001 - bytes from the wire must never kill the node
-            self._answers.refused(Request('via_points', values, 0, None),
-                                  f'malformed message: {error}')
-            return None
-        stamp = message.header.stamp
-        stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # 0 or past: "now"
-        request = Request('via_points', values, stamp_ns, None)
-        points = [(p.positions, p.velocities, p.accelerations, _seconds(p.time_from_start))
-                  for p in message.points]
-        try:
-            request.request = parse_via(self._config().joints, message.joint_names, points)
-        except RequestError as error:
-            self._answers.refused(request, str(error))
-            return None
-        return request
 
     # ------------------------------------------------------------------ plan and splice
 
@@ -330,3 +288,55 @@ class RequestHandler:
         response.message = ('stopping: at rest in '
                             f'{motion.plan.duration:.3f} s' if motion else 'stop failed')
         return response
+
+
+def goal_request(data: bytes, received: int, joints: Sequence[str],
+                 answers: Answers) -> Request | None:
+    """
+    Read a serialised goal into a :class:`Request`, or refuse it (ERROR) and return ``None``.
+
+    ``received`` (ns, system clock) goes into its answers; ``joints`` is the joint set.
+    """
+    fields = read_goal(data)
+    if fields is None:  # not the usual little-endian CDR: let rclpy read it
+        try:
+            message = deserialize_message(data, JointState)
+        except Exception as error:  # noqa: BLE001 - wire bytes must never kill the node
+            answers.refused(Request('goal', answers.values('goal', '', received), 0, None),
+                            f'malformed message: {error}')
+            return None
+        fields = message.header.frame_id, message.name, message.position
+    frame_id, names, positions = fields
+    request = Request('goal', answers.values('goal', frame_id, received), 0, None)
+    try:
+        request.request = parse_goal(joints, names, positions)
+    except RequestError as error:
+        answers.refused(request, str(error))
+        return None
+    return request
+
+
+def via_request(data: bytes, received: int, joints: Sequence[str],
+                answers: Answers) -> Request | None:
+    """:func:`goal_request` for a serialised ``JointTrajectory``; a huge one is not built."""
+    frame_id, count = peek_via_points(data)
+    values = answers.values('via_points', frame_id, received)
+    if count > MAX_VIA_POINTS:  # refused before one Python object per point is made
+        answers.refused(Request('via_points', values, 0, None), too_many_points(count))
+        return None
+    try:
+        message = deserialize_message(data, JointTrajectory)
+    except Exception as error:  # noqa: BLE001 - bytes from the wire must never kill the node
+        answers.refused(Request('via_points', values, 0, None), f'malformed message: {error}')
+        return None
+    stamp = message.header.stamp
+    stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # 0 or past: "now"
+    request = Request('via_points', values, stamp_ns, None)
+    points = [(p.positions, p.velocities, p.accelerations, _seconds(p.time_from_start))
+              for p in message.points]
+    try:
+        request.request = parse_via(joints, message.joint_names, points)
+    except RequestError as error:
+        answers.refused(request, str(error))
+        return None
+    return request
