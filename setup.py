@@ -26,8 +26,8 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-            'generator = traj_gen_ros.generator_node:main',
-            'traj-gen = traj_gen_ros.cli:main',
+            'generator = traj_gen_ros.node.generator:main',
+            'traj-gen = traj_gen_ros.cli.main:main',
         ],
     },
 )

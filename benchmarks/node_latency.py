@@ -174,7 +174,7 @@ def stop(process: subprocess.Popen) -> None:
 
 
 def generator(rate: float) -> subprocess.Popen:
-    return start([sys.executable, '-m', 'traj_gen_ros.generator_node', '--ros-args',
+    return start([sys.executable, '-m', 'traj_gen_ros.node.generator', '--ros-args',
                   '--params-file', str(REPO / 'config' / 'generator.yaml'),
                   '-p', f'rate_hz:={rate}'])
 

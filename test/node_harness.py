@@ -107,7 +107,7 @@ class NodeProcess:
         if params_file is not None:
             args += ['--params-file', str(params_file)]
         args += list(ros_args)
-        command = command or [sys.executable, '-m', 'traj_gen_ros.generator_node']
+        command = command or [sys.executable, '-m', 'traj_gen_ros.node.generator']
         self.process = subprocess.Popen(command + args, stdout=self.log,
                                         stderr=subprocess.STDOUT, env=env or node_env(),
                                         cwd=str(cwd or REPO))

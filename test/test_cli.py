@@ -10,7 +10,7 @@ import sys
 import matplotlib.image as mpimg
 import numpy as np
 import pytest
-from traj_gen_ros.cli import MATPLOTLIB_REQUIREMENT
+from traj_gen_ros.cli.main import MATPLOTLIB_REQUIREMENT
 
 REPO = Path(__file__).resolve().parents[1]
 TIMEOUT = 120  # s per command: generous, the machine is shared
@@ -43,7 +43,7 @@ def env() -> dict:
 
 def traj_gen(*args: str) -> subprocess.CompletedProcess:
     """Run `traj-gen ARGS` from the work tree (test_install.py runs the installed script)."""
-    return subprocess.run([sys.executable, '-m', 'traj_gen_ros.cli', *args], cwd=REPO,
+    return subprocess.run([sys.executable, '-m', 'traj_gen_ros.cli.main', *args], cwd=REPO,
                           env=env(), capture_output=True, text=True, timeout=TIMEOUT)
 
 
@@ -217,7 +217,7 @@ def test_plot_without_matplotlib_says_what_to_install_and_exits_2(tmp_path, args
     # `import matplotlib` fails as in an environment without it (None in sys.modules).
     script = ('import sys\n'
               "sys.modules['matplotlib'] = None\n"
-              'from traj_gen_ros.cli import main\n'
+              'from traj_gen_ros.cli.main import main\n'
               'sys.exit(main(sys.argv[1:]))\n')
     result = subprocess.run([sys.executable, '-c', script, *args], cwd=tmp_path, env=env(),
                             capture_output=True, text=True, timeout=TIMEOUT)
@@ -249,7 +249,7 @@ def test_every_subcommand_has_help_with_examples(command):
 def test_offline_commands_import_no_ros(tmp_path):
     script = (
         'import sys\n'
-        'from traj_gen_ros import cli\n'
+        'from traj_gen_ros.cli import main as cli\n'
         f'assert cli.main({["solve", *LSPB_ARGS]!r}) == 0\n'
         f'assert cli.main({["plot", *CUBIC_ARGS, "-o", str(tmp_path / "p.png")]!r}) == 0\n'
         "loaded = [m for m in sys.modules if m.startswith(('rclpy', 'rcl_', 'sensor_msgs'))]\n"
@@ -261,5 +261,5 @@ def test_offline_commands_import_no_ros(tmp_path):
 
 def test_console_script_is_declared_next_to_the_generator():
     setup = (REPO / 'setup.py').read_text()
-    assert "'traj-gen = traj_gen_ros.cli:main'," in setup
-    assert "'generator = traj_gen_ros.generator_node:main'," in setup
+    assert "'traj-gen = traj_gen_ros.cli.main:main'," in setup
+    assert "'generator = traj_gen_ros.node.generator:main'," in setup

@@ -24,7 +24,7 @@ TIMEOUT = 120  # s per command: generous, the machine is shared
 
 def traj_gen(*args: str) -> subprocess.CompletedProcess:
     """Run `traj-gen ARGS` in the test's isolated ROS domain (node_harness sets it)."""
-    return subprocess.run([sys.executable, '-m', 'traj_gen_ros.cli', *args], cwd=REPO,
+    return subprocess.run([sys.executable, '-m', 'traj_gen_ros.cli.main', *args], cwd=REPO,
                           env=node_env(), capture_output=True, text=True, timeout=TIMEOUT)
 
 

@@ -1,6 +1,6 @@
-"""traj_gen_ros.diagnostics: the /diagnostics content, without ROS."""
+"""traj_gen_ros.node.diagnostics: the /diagnostics content, without ROS."""
 
-from traj_gen_ros.diagnostics import (
+from traj_gen_ros.node.diagnostics import (
     MotionLog,
     node_status,
     OK,

@@ -14,7 +14,8 @@ import sys
 
 from node_harness import node_env, NodeProcess, REPO
 import pytest
-from traj_gen_ros import cli, generator_node
+from traj_gen_ros.cli import main as cli
+from traj_gen_ros.node import generator as generator_node
 
 VENV = REPO / '.venv'
 BIN = VENV / 'bin'

@@ -1,4 +1,4 @@
-"""traj_gen_ros.joint_limits: URDF limits (urdfdom semantics) merged with the parameters."""
+"""traj_gen_ros.node.urdf_limits: URDF limits (urdfdom semantics) merged with the parameters."""
 
 from concurrent.futures import ThreadPoolExecutor
 import math
@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 import pytest
-from traj_gen_ros import joint_limits as jl
+from traj_gen_ros.node import urdf_limits as jl
 
 INF = math.inf
 
@@ -271,7 +271,7 @@ def test_positions_given_as_numpy_array(merged):
 
 def test_module_imports_no_ros():
     script = ('import sys\n'
-              'import traj_gen_ros.joint_limits\n'
+              'import traj_gen_ros.node.urdf_limits\n'
               "loaded = [m for m in sys.modules if m.startswith(('rclpy', 'rcl_'))]\n"
               'assert not loaded, loaded\n')
     result = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,

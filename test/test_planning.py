@@ -9,7 +9,16 @@ import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import JointState
 from traj_gen_ros import limit_violation, min_time, scurve_brake
-from traj_gen_ros.motion_planning import (
+from traj_gen_ros.node.config import make_config
+from traj_gen_ros.node.parsing import (
+    GoalRequest,
+    parse_goal,
+    parse_via,
+    peek_via_points,
+    read_goal,
+    RequestError,
+)
+from traj_gen_ros.node.planning import (
     held,
     plan_request,
     plan_stop,
@@ -18,16 +27,7 @@ from traj_gen_ros.motion_planning import (
     State,
     via_points,
 )
-from traj_gen_ros.node_config import make_config
-from traj_gen_ros.request_parsing import (
-    GoalRequest,
-    parse_goal,
-    parse_via,
-    peek_via_points,
-    read_goal,
-    RequestError,
-)
-from traj_gen_ros.schedule import Schedule
+from traj_gen_ros.node.schedule import Schedule
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 JOINTS = ['a', 'b', 'c']

@@ -12,8 +12,8 @@ import numpy as np
 import numpy.polynomial.polynomial as poly
 import pytest
 from traj_gen_ros import cubic, quintic
-from traj_gen_ros.move_peaks import peaks
-from traj_gen_ros.polynomial_candidates import (
+from traj_gen_ros.core.exact.move_peaks import peaks
+from traj_gen_ros.core.exact.peak_candidates import (
     _end_table,
     _END_TABLES,
     _interior_polynomials,
@@ -21,13 +21,13 @@ from traj_gen_ros.polynomial_candidates import (
     _SHAPES,
     candidates,
 )
-from traj_gen_ros.polynomial_timing import (
+from traj_gen_ros.core.exact.polynomial_durations import (
     _common_duration,
     _onto_common_run,
     _smallest_common_duration,
     synchronised_duration,
 )
-from traj_gen_ros.second_order import minimum_times
+from traj_gen_ros.core.exact.second_order import minimum_times
 
 # Position in normalised time τ, per term (ascending in τ): Craig's quintic (eq. 7.3-7.5)
 # and cubic (eq. 7.9) to rest, as D·m_D + v0 T·m_v + a0 T²·m_a.

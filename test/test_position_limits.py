@@ -1,4 +1,4 @@
-"""traj_gen_ros.position_limits: exact position extrema of plans, refusals with names."""
+"""traj_gen_ros.node.position_checks: exact position extrema of plans, refusals with names."""
 
 import dataclasses
 import math
@@ -6,14 +6,14 @@ import math
 import numpy as np
 import pytest
 from traj_gen_ros import min_time
-from traj_gen_ros.braking import brake
-from traj_gen_ros.joint_limits import merge_limits, UrdfLimits
-from traj_gen_ros.motion_planning import plan_request, plan_stop, State
-from traj_gen_ros.node_config import make_config
-from traj_gen_ros.paths import plan_path
-from traj_gen_ros.position_limits import check_plan, check_request, position_extrema
-from traj_gen_ros.request_parsing import GoalRequest, RequestError, ViaRequest
-from traj_gen_ros.timing import hold
+from traj_gen_ros.core.paths import plan_path
+from traj_gen_ros.core.stops import brake
+from traj_gen_ros.core.timing import hold
+from traj_gen_ros.node.config import make_config
+from traj_gen_ros.node.parsing import GoalRequest, RequestError, ViaRequest
+from traj_gen_ros.node.planning import plan_request, plan_stop, State
+from traj_gen_ros.node.position_checks import check_plan, check_request, position_extrema
+from traj_gen_ros.node.urdf_limits import merge_limits, UrdfLimits
 
 NAMES = ('shoulder', 'elbow', 'wrist')
 

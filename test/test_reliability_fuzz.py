@@ -32,10 +32,10 @@ from reliability_cases import (
     refusal_ok,
 )
 from sensor_msgs.msg import JointState
-from traj_gen_ros.motion_planning import held, plan_request, sample_motion
-from traj_gen_ros.node_config import DEFAULT_MAX_JERK, make_config
-from traj_gen_ros.request_parsing import parse_goal, parse_via, RequestError
-from traj_gen_ros.schedule import Schedule
+from traj_gen_ros.node.config import DEFAULT_MAX_JERK, make_config
+from traj_gen_ros.node.parsing import parse_goal, parse_via, RequestError
+from traj_gen_ros.node.planning import held, plan_request, sample_motion
+from traj_gen_ros.node.schedule import Schedule
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 CASES = int(os.environ.get('FUZZ_CASES', '2000'))

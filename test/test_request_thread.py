@@ -13,7 +13,7 @@ from node_harness import in_process_node  # also isolates the DDS domain
 import pytest
 from rclpy.executors import SingleThreadedExecutor
 from sensor_msgs.msg import JointState
-from traj_gen_ros.request_thread import NotForTheExecutor, RequestThread
+from traj_gen_ros.node.request_thread import NotForTheExecutor, RequestThread
 
 
 @pytest.fixture

@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
-from traj_gen_ros.answers import Answers, Request
-from traj_gen_ros.motion_planning import held, plan_request
-from traj_gen_ros.node_config import make_config
-from traj_gen_ros.request_handler import MAX_MARGIN_NS, RequestHandler, SAMPLE_AFTER_FIRST_NS
-from traj_gen_ros.request_parsing import parse_goal
-from traj_gen_ros.stream import Stream
+from traj_gen_ros.node.answers import Answers, Request
+from traj_gen_ros.node.config import make_config
+from traj_gen_ros.node.parsing import parse_goal
+from traj_gen_ros.node.planning import held, plan_request
+from traj_gen_ros.node.request_handler import MAX_MARGIN_NS, RequestHandler, SAMPLE_AFTER_FIRST_NS
+from traj_gen_ros.node.stream import Stream
 from trajectory_msgs.msg import JointTrajectory
 
 PERIOD = 10_000_000  # 100 Hz

@@ -1,4 +1,4 @@
-"""Jerk-limited S-curve moves (traj_gen_ros.scurve_move) against Ruckig as the oracle."""
+"""Jerk-limited S-curve moves (core.jerk_limited.move) against Ruckig as the oracle."""
 
 import math
 import re
@@ -14,11 +14,11 @@ from traj_gen_ros import (
     limit_violation,
     min_time,
     plan_path,
-    scurve_fallback,
 )
-from traj_gen_ros.scurve_move import scurve, scurve_min_time
-from traj_gen_ros.scurve_ruckig import Move
-from traj_gen_ros.trajectory import Trajectory
+from traj_gen_ros.core.jerk_limited import fallback as scurve_fallback
+from traj_gen_ros.core.jerk_limited.move import scurve, scurve_min_time
+from traj_gen_ros.core.jerk_limited.ruckig_backend import Move
+from traj_gen_ros.core.trajectory import Trajectory
 
 FAST = settings(max_examples=80, deadline=None)
 TOL = 1e-9

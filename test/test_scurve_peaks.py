@@ -4,7 +4,7 @@ from hypothesis import given, settings
 import hypothesis.strategies as st
 import numpy as np
 from traj_gen_ros import JerkLimitedTrajectory, min_time, plan_path
-from traj_gen_ros.trajectory import Trajectory
+from traj_gen_ros.core.trajectory import Trajectory
 
 LIMITS = (np.array([1.0, 2.0, 0.5]), np.array([2.0, 5.0, 1.0]), np.array([10.0, 40.0, 3.0]))
 unit = st.floats(-1.0, 1.0)

@@ -1,4 +1,4 @@
-"""Jerk-limited paths through via points (traj_gen_ros.scurve_path), Ruckig as the oracle."""
+"""Jerk-limited paths through via points (core.jerk_limited.path), Ruckig as the oracle."""
 
 import math
 import re
@@ -9,8 +9,8 @@ import hypothesis.strategies as st
 import numpy as np
 import pytest
 from test_scurve import resolution, ruckig_duration
-from traj_gen_ros.polynomial import heuristic_velocities
-from traj_gen_ros.scurve_path import scurve_via, scurve_via_durations
+from traj_gen_ros.core.jerk_limited.path import scurve_via, scurve_via_durations
+from traj_gen_ros.core.polynomial import heuristic_velocities
 
 FAST = settings(max_examples=40, deadline=None)
 TOL = 1e-9

@@ -4,7 +4,7 @@ from hypothesis import given, settings
 import hypothesis.strategies as st
 import numpy as np
 from traj_gen_ros import cubic_via, lspb_via, min_time, quintic
-from traj_gen_ros.trajectory import state_at
+from traj_gen_ros.core.trajectory import state_at
 
 LIMITS = (np.array([1.0, 2.0, 0.5]), np.array([2.0, 5.0, 1.0]), np.array([10.0, 40.0, 3.0]))
 row = st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3).map(np.array)

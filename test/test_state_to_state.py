@@ -22,7 +22,7 @@ from traj_gen_ros import (
     quintic,
     within_limits,
 )
-from traj_gen_ros.polynomial_timing import SHORTEST_POLYNOMIAL
+from traj_gen_ros.core.exact.polynomial_durations import SHORTEST_POLYNOMIAL
 
 ORACLE = settings(max_examples=200, deadline=None)
 GRID = settings(max_examples=12, deadline=None)

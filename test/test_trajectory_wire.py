@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import JointState
-from traj_gen_ros.trajectory_wire import (
+from traj_gen_ros.node.wire import (
     joint_names_cdr,
     joint_state_cdr,
     joint_trajectory_cdr,

@@ -1,12 +1,15 @@
-"""Real roots on [0, 1] of batched polynomials (traj_gen_ros.unit_roots)."""
+"""Real roots on [0, 1] of batched polynomials (traj_gen_ros.core.exact.unit_roots)."""
 
 import numpy as np
 import numpy.polynomial.polynomial as poly
 import pytest
 import traj_gen_ros as tg
-from traj_gen_ros import unit_roots
-from traj_gen_ros.trajectory import state_at
-from traj_gen_ros.unit_roots import quadratic_roots_in_unit_interval, roots_in_unit_interval
+from traj_gen_ros.core.exact import unit_roots
+from traj_gen_ros.core.exact.unit_roots import (
+    quadratic_roots_in_unit_interval,
+    roots_in_unit_interval,
+)
+from traj_gen_ros.core.trajectory import state_at
 
 
 def from_roots(roots, scale=1.0):

@@ -1,0 +1,35 @@
+"""
+The pieces ``traj-gen``'s offline and ROS commands share: exit codes, errors, reports.
+
+Used by :mod:`traj_gen_ros.cli.main` and :mod:`traj_gen_ros.cli.ros`. Its own module so that
+``cli_ros`` needs nothing from ``cli`` (``cli`` imports ``cli_ros`` only when a ROS
+command runs, so the offline commands need no ROS).
+"""
+
+from __future__ import annotations
+
+import json
+
+EXIT_OK = 0
+EXIT_REFUSED = 1
+EXIT_USAGE = 2
+EXIT_NO_ANSWER = 3
+EXIT_INTERNAL = 4
+
+
+class UsageError(Exception):
+    """Bad arguments or a plan the solver refuses: one line on stderr, exit status 2."""
+
+    def __init__(self, message: str, prog: str | None = None) -> None:
+        """Keep ``message`` and the program (``traj-gen goal`` ...) it is about."""
+        super().__init__(message)
+        self.prog = prog
+
+
+def report_plot(info: dict, as_json: bool) -> None:
+    """Print where the PNG went (and its size and panels with ``--json``)."""
+    if as_json:
+        print(json.dumps(info, indent=2, ensure_ascii=False))
+    else:
+        print(f"wrote {info['output']} ({info['width']}x{info['height']} px, "
+              f"{len(info['panels'])} panels)")

@@ -1,0 +1,309 @@
+"""
+ROS side of ``traj-gen``: send goals and via points to a running generator, record its plans.
+
+:mod:`traj_gen_ros.cli.main` imports this module only when one of these commands runs, so the
+offline subcommands need no ROS at all.
+
+A status answers a request when it comes from the node (``name`` is its full name) after
+the request was published, its ``request`` value names the request's kind (``goal`` or
+``via_points``) and its ``frame_id`` value echoes the request's ``header.frame_id``, which
+``traj-gen`` sets to a token of its own (``traj-gen/<pid>/<random>``). A node that does not
+echo ``frame_id`` is matched on the kind alone.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable, Iterator
+import contextlib
+import json
+import math
+import os
+import re
+import secrets
+import sys
+import time
+
+from builtin_interfaces.msg import Duration
+from diagnostic_msgs.msg import DiagnosticStatus
+import numpy as np
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from traj_gen_ros.cli.common import (
+    EXIT_NO_ANSWER,
+    EXIT_OK,
+    EXIT_REFUSED,
+    report_plot,
+    UsageError,
+)
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+_AT_GOAL = 1e-6  # rad: the motion has ended when the named joints are this close, at rest
+_LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
+_SPIN_PERIOD = 0.05
+
+
+class NoAnswerError(Exception):
+    """Nothing arrived in time: exit status 3."""
+
+
+def node_name(text: str) -> str:
+    """Return the generator's full name, ``/ns/name``, from ``--node``."""
+    name = '/' + text.strip('/')
+    if not re.fullmatch(r'(/[A-Za-z_][A-Za-z0-9_]*)+', name):
+        raise UsageError(f"--node '{text}' is not a node name such as /trajectory_generator")
+    return name
+
+
+def joint_states_topic(node: str) -> str:
+    """Return ``joint_states`` in the namespace of ``node`` (the node's default topic)."""
+    namespace = node.rsplit('/', 1)[0]
+    return f'{namespace}/joint_states'
+
+
+def _number(text: str, what: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise UsageError(f"{what}: '{text}' is not a number") from None
+    if not math.isfinite(value):
+        raise UsageError(f"{what}: '{text}' must be finite")
+    return value
+
+
+def parse_goal(items: list[str], degrees: bool) -> tuple[list[str], list[float]]:
+    """Parse ``JOINT=POSITION`` items into names and positions (rad)."""
+    names, positions = [], []
+    scale = math.radians(1.0) if degrees else 1.0
+    for item in items:
+        name, sep, value = item.partition('=')
+        if not sep or not name:
+            raise UsageError(f"'{item}' is not JOINT=POSITION (e.g. joint_1=0.5)")
+        names.append(name)
+        positions.append(_number(value, name) * scale)
+    return names, positions
+
+
+def parse_via(joints: list[str], points: list[list[str]],
+              degrees: bool) -> list[tuple[list[float], float]]:
+    """
+    Parse ``--point Q… [@T]`` groups into ``[(positions (rad), time (s)), …]``.
+
+    Either every point has ``@T`` or none has; with none every time is 0, which the node
+    reads as "time the path from the limits".
+    """
+    scale = math.radians(1.0) if degrees else 1.0
+    parsed = []
+    timed = [group[-1].startswith('@') for group in points]
+    if any(timed) and not all(timed):
+        raise UsageError('give @T on every --point, or on none (the node then times them)')
+    for index, group in enumerate(points):
+        values = group[:-1] if timed[index] else group
+        when = _number(group[-1][1:], f'point {index} time') if timed[index] else 0.0
+        if len(values) != len(joints):
+            raise UsageError(f'point {index} has {len(values)} positions for {len(joints)} '
+                             f'joints ({" ".join(joints)})')
+        parsed.append(([_number(v, f'point {index}') * scale for v in values], when))
+    return parsed
+
+
+class _Session:
+    """An rclpy context, node and executor for one command."""
+
+    def __init__(self) -> None:
+        self.context = rclpy.Context()
+        rclpy.init(args=['traj-gen'], context=self.context)
+        self.node = rclpy.create_node(f'traj_gen_cli_{os.getpid()}', context=self.context,
+                                      start_parameter_services=False)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+
+    def wait(self, condition: Callable[[], object], timeout: float, what: str) -> object:
+        """Spin until ``condition()`` is truthy and return it; NoAnswerError after ``timeout``."""
+        deadline = time.monotonic() + timeout
+        while True:
+            value = condition()
+            if value:
+                return value
+            if time.monotonic() > deadline:
+                raise NoAnswerError(f'no answer after {timeout:g} s: {what}')
+            self.executor.spin_once(timeout_sec=_SPIN_PERIOD)
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self.context.try_shutdown()
+
+
+@contextlib.contextmanager
+def _session() -> Iterator[_Session]:
+    session = _Session()
+    try:
+        yield session
+    finally:
+        session.close()
+
+
+def _reliable(depth: int, transient_local: bool = False) -> object:
+    durability = (DurabilityPolicy.TRANSIENT_LOCAL if transient_local
+                  else DurabilityPolicy.VOLATILE)
+    return QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=durability)
+
+
+def _status_dict(status: object) -> dict:
+    level = status.level
+    level = level[0] if isinstance(level, bytes) else int(level)
+    return {'level': _LEVELS.get(level, str(level)), 'name': status.name,
+            'message': status.message,
+            'values': {pair.key: pair.value for pair in status.values}}
+
+
+def _request_message(args: argparse.Namespace) -> tuple[object, str, list[str], list[float]]:
+    """Build the request; return it, its kind, the named joints and their final targets."""
+    token = f'traj-gen/{os.getpid()}/{secrets.token_hex(4)}'
+    if args.command == 'goal':
+        names, positions = parse_goal(args.positions, args.degrees)
+        message = JointState(name=names, position=positions)
+        message.header.frame_id = token
+        return message, 'goal', names, positions
+    points = parse_via(args.joints, args.points, args.degrees)
+    message = JointTrajectory(joint_names=list(args.joints))
+    message.header.frame_id = token
+    for positions, when in points:
+        nanoseconds = int(round(when * 1e9))
+        message.points.append(JointTrajectoryPoint(
+            positions=positions, time_from_start=Duration(
+                sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)))
+    return message, 'via_points', list(args.joints), points[-1][0]
+
+
+def run_request(args: argparse.Namespace) -> int:
+    """``traj-gen goal`` / ``traj-gen via``: publish, wait for the status, print it."""
+    command = f'traj-gen {args.command}'
+    node = node_name(args.node)
+    if args.timeout <= 0:
+        raise UsageError('--timeout must be > 0 s')
+    message, kind, names, targets = _request_message(args)
+    try:
+        with _session() as session:
+            ros = session.node
+            statuses: list = []
+            states: list = []
+            publisher = ros.create_publisher(type(message), f'{node}/{kind}', 10)
+            status_sub = ros.create_subscription(
+                DiagnosticStatus, f'{node}/status', statuses.append, _reliable(100))
+            if args.wait:
+                ros.create_subscription(JointState, args.joint_states or joint_states_topic(node),
+                                        states.append, _reliable(10))
+            session.wait(lambda: publisher.get_subscription_count() > 0
+                         and status_sub.get_publisher_count() > 0, args.timeout,
+                         f'{node} is not subscribed to {node}/{kind} (is the node running, '
+                         'with the same ROS_DOMAIN_ID?)')
+            seen = len(statuses)
+            publisher.publish(message)
+
+            def ours(status: object) -> bool:
+                values = {pair.key: pair.value for pair in status.values}
+                return (status.name == node and values.get('request') == kind
+                        and values.get('frame_id', message.header.frame_id)
+                        == message.header.frame_id)
+
+            def answer() -> object:
+                return next((s for s in statuses[seen:] if ours(s)), None)
+
+            status = _status_dict(session.wait(answer, args.timeout,
+                                               f'no {node}/status for the {kind} request'))
+            if args.json:
+                print(json.dumps(status, indent=2))
+            else:
+                print(f"{status['level']}: {status['message']}")
+            if status['level'] != 'OK':
+                print(f"{command}: {status['message']}", file=sys.stderr)
+                return EXIT_REFUSED
+            if args.wait:
+                _wait_for_end(session, states, status, names, targets, args.timeout)
+    except NoAnswerError as error:
+        print(f'{command}: {error}', file=sys.stderr)
+        return EXIT_NO_ANSWER
+    return EXIT_OK
+
+
+def _wait_for_end(session: _Session, states: list, status: dict, names: list[str],
+                  targets: list[float], timeout: float) -> None:
+    """Wait until the stream holds the named joints at their targets, all at rest."""
+    values = status['values']
+    motion = float(values.get('duration', 0.0)) + float(values.get('start_delay', 0.0))
+    target = dict(zip(names, targets, strict=True))
+    seen = len(states)
+
+    def ended() -> bool:
+        if len(states) == seen:
+            return False
+        state = states[-1]
+        position = dict(zip(state.name, state.position, strict=False))
+        return (not any(abs(v) > 0.0 for v in state.velocity)
+                and all(abs(position.get(n, math.inf) - q) <= _AT_GOAL
+                        for n, q in target.items()))
+
+    session.wait(ended, motion + timeout, 'the motion did not end on the joint_states stream '
+                 '(see --joint-states)')
+
+
+def run_plot_topic(args: argparse.Namespace) -> int:
+    """``traj-gen plot --topic``: plot one JointTrajectory (transient local) from a topic."""
+    from traj_gen_ros.cli import plot as plotting  # matplotlib: loaded only when a plot is made
+
+    if args.timeout <= 0:
+        raise UsageError('--timeout must be > 0 s')
+    topic = args.topic if args.topic.startswith('/') else '/' + args.topic
+    received: list = []
+    try:
+        with _session() as session:
+            session.node.create_subscription(JointTrajectory, topic, received.append,
+                                             _reliable(1, transient_local=True))
+            session.wait(lambda: received, args.timeout,
+                         f'no trajectory_msgs/JointTrajectory on {topic}')
+    except NoAnswerError as error:
+        print(f'traj-gen plot: {error}', file=sys.stderr)
+        return EXIT_NO_ANSWER
+    message = received[0]
+    if not message.points:
+        raise UsageError(f'the trajectory on {topic} has no points')
+    times, positions, velocities, accelerations = trajectory_arrays(message)
+    scale = 180.0 / math.pi if args.degrees else 1.0
+    info = plotting.plot_samples(
+        times, positions * scale, velocities * scale, accelerations * scale, args.output,
+        unit='deg' if args.degrees else 'rad',
+        marks=(times[[0, -1]], positions[[0, -1]] * scale), size=args.size,
+        title=f'{topic}: {len(times)} points, {times[-1]:.3g} s',
+        joint_names=list(message.joint_names))
+    report_plot(info, args.json)
+    return EXIT_OK
+
+
+def trajectory_arrays(message: object
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """
+    Return times ``(n,)`` and positions, velocities, accelerations ``(n, joints)``.
+
+    Velocities and accelerations missing from the message are differentiated numerically.
+    """
+    times = np.array([p.time_from_start.sec + p.time_from_start.nanosec * 1e-9
+                      for p in message.points])
+    positions = np.array([list(p.positions) for p in message.points], dtype=float)
+
+    def derivative(values: np.ndarray) -> np.ndarray:
+        if len(times) < 2:
+            return np.zeros_like(values)
+        return np.gradient(values, times, axis=0)
+
+    velocities = (np.array([list(p.velocities) for p in message.points], dtype=float)
+                  if all(len(p.velocities) == positions.shape[1] for p in message.points)
+                  else derivative(positions))
+    accelerations = (np.array([list(p.accelerations) for p in message.points], dtype=float)
+                     if all(len(p.accelerations) == positions.shape[1] for p in message.points)
+                     else derivative(velocities))
+    return times, positions, velocities, accelerations

@@ -1,0 +1,227 @@
+"""
+The ``trajectory_generator`` node: plans from its current setpoint and streams it.
+
+A thin ROS layer: this module declares the parameters and creates the subscriptions, the
+service and the publishers; the work is done by
+
+* :mod:`traj_gen_ros.node.request_handler`: a request from its callback to the stream, in the
+  order parse (:mod:`~traj_gen_ros.node.parsing`) → validate and plan
+  (:mod:`~traj_gen_ros.node.planning`) → sample → splice into the schedule;
+* :mod:`traj_gen_ros.node.request_thread`: the thread that waits on ``~/goal`` and
+  ``~/via_points`` alone and runs their callbacks (the executor serves the rest);
+* :mod:`traj_gen_ros.node.stream`: the thread that publishes the schedule's setpoint
+  (:mod:`~traj_gen_ros.node.schedule`) every period;
+* :mod:`traj_gen_ros.node.answers`: ``~/status`` and ``~/trajectory``;
+* :mod:`traj_gen_ros.node.config`: parameters → a validated ``Config``;
+  :mod:`~traj_gen_ros.node.parameters` declares them, statically typed;
+* :mod:`traj_gen_ros.node.robot_description`: the URDF and ``min_position``/``max_position`` → the
+  limits in force (``Config.limits``);
+* :mod:`traj_gen_ros.node.diagnostics_publisher`: ``/diagnostics`` about once a second.
+
+Interface (all names relative, so namespaces and remapping work):
+
+* ``joint_states`` (``sensor_msgs/JointState``, reliable, depth 10): setpoint at ``rate_hz``.
+* ``~/trajectory`` (``trajectory_msgs/JointTrajectory``, reliable, transient local, depth 1):
+  each accepted plan sampled every ``1/rate_hz`` s.
+* ``~/status`` (``diagnostic_msgs/DiagnosticStatus``): OK or ERROR with a reason, per request.
+* ``~/goal`` (``sensor_msgs/JointState``), ``~/via_points`` (``trajectory_msgs/JointTrajectory``).
+* ``~/stop`` (``std_srvs/Trigger``): brake within ``max_acceleration`` (and ``max_jerk``
+  with profile ``scurve``) and hold.
+* ``robot_description`` (``std_msgs/String``, transient local): the robot's URDF, in.
+* ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): the node's health, about 1 Hz.
+"""
+
+from __future__ import annotations
+
+import gc
+import signal
+import sys
+import threading
+import time
+
+from rcl_interfaces.msg import SetParametersResult
+import rclpy
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from traj_gen_ros.node.config import Config, initial_state, make_config
+from traj_gen_ros.node.diagnostics import RateMeter
+from traj_gen_ros.node.diagnostics_publisher import CountingAnswers, NodeDiagnostics
+from traj_gen_ros.node.parameters import declare_parameters
+from traj_gen_ros.node.planning import held
+from traj_gen_ros.node.request_handler import REQUEST_DEPTH, RequestHandler
+from traj_gen_ros.node.request_thread import NotForTheExecutor, RequestThread
+from traj_gen_ros.node.robot_description import NodeLimits
+from traj_gen_ros.node.stream import (
+    EXECUTOR_FIFO_PRIORITY,
+    favour_calling_thread,
+    realtime_calling_thread,
+    Stream,
+)
+from trajectory_msgs.msg import JointTrajectory
+
+NODE_NAME = 'trajectory_generator'
+CONFIG_PARAMETERS = ('joints', 'rate_hz', 'profile', 'via_velocities', 'max_velocity',
+                     'max_acceleration', 'lspb_acceleration', 'max_jerk')
+#: The executor thread gets the GIL back to the stream thread this often (s).
+SWITCH_INTERVAL = 0.0001
+#: The spin loop checks this often (s) whether SIGINT/SIGTERM asked it to end.
+SIGNAL_POLL = 0.1
+
+
+class TrajectoryGenerator(Node):
+    """Plan smooth joint motions from the current setpoint and stream the setpoint."""
+
+    def __init__(self, **kwargs: object) -> None:
+        """Declare parameters, check them, and create the interface; ValueError if invalid."""
+        super().__init__(NODE_NAME, **kwargs)
+        self._declare_parameters()
+        self._limits = NodeLimits(self, lambda: self._apply_parameters([]))
+        self._config = self._read_config()
+        initial = initial_state(self._config.joints,
+                                self.get_parameter('initial_positions').value)
+        joint_states = self.create_publisher(
+            JointState, 'joint_states',
+            QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+        self._node_clock = self.get_clock()  # ROS time: use_sim_time makes it follow /clock
+        self._rate_meter = RateMeter(self._now_ns() * 1e-9)  # for /diagnostics
+        self._stream = Stream(held(initial), self._config.joints, self._now_ns,
+                              lambda: self._config.period_ns,
+                              self._rate_meter.wrap(joint_states.publish),
+                              self.get_logger().error)
+        self.context.on_shutdown(self._stream.stopping.set)  # SIGINT/SIGTERM: stream ends
+        self._answers = CountingAnswers(self, lambda: self._config.joints)
+        self._requests = RequestHandler(lambda: self._config, self._stream, self._answers,
+                                        self._now_ns, self.get_logger().error)
+        # Served by the request thread, not the executor (request_thread).
+        requests_only = NotForTheExecutor()
+        # Raw: a goal's names and positions are read off the wire (microseconds, against
+        # tens for an rclpy message), and a via request's point count, so a huge message is
+        # refused without building one Python object per point.
+        self._goal_subscription = self.create_subscription(
+            JointState, '~/goal', self._on_goal, REQUEST_DEPTH, raw=True,
+            callback_group=requests_only)
+        self._via_subscription = self.create_subscription(
+            JointTrajectory, '~/via_points', self._on_via_points, REQUEST_DEPTH, raw=True,
+            callback_group=requests_only)
+        self._request_thread = RequestThread(
+            self.context, [self._goal_subscription, self._via_subscription],
+            self.get_logger().error)
+        self.create_service(Trigger, '~/stop', self._on_stop)
+        self.add_on_set_parameters_callback(self._check_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+        self._diagnostics = NodeDiagnostics(self, lambda: self._config, self._limits,
+                                            self._answers, self._rate_meter)
+        self._answers.trajectory(0, held(initial), self._config.rate_hz)  # warm up
+        priority = self._stream.start()
+        self._request_thread.start()
+        self.get_logger().info(
+            f'streaming {len(self._config.joints)} joints at {self._config.rate_hz:g} Hz '
+            f'({priority}), profile {self._config.profile}')
+
+    # ------------------------------------------------------------------ requests
+
+    def _on_goal(self, data: bytes, info: dict) -> None:
+        self._requests.take(self._goal_subscription, JointState, (data, info))
+
+    def _on_via_points(self, data: bytes, info: dict) -> None:
+        self._requests.take(self._via_subscription, JointTrajectory, (data, info))
+
+    def _on_stop(self, request: Trigger.Request, response: Trigger.Response
+                 ) -> Trigger.Response:
+        del request
+        return self._requests.stop(response)
+
+    def _now_ns(self) -> int:
+        """
+        Read the node clock (ns): ROS time, the system time unless ``/clock`` drives it.
+
+        The stream reads it several times a tick and a request several times: without sim
+        time, ``time.time_ns()`` (the same ``CLOCK_REALTIME``) costs 0.1 µs and checking
+        that costs 1.5, against 4.8 µs for ``Clock.now()`` (each holding the GIL).
+        """
+        clock = self._node_clock
+        if clock.ros_time_is_active:
+            return clock.now().nanoseconds
+        return time.time_ns()
+
+    # ------------------------------------------------------------------ parameters
+
+    def _declare_parameters(self) -> None:
+        declare_parameters(self)  # statically typed; numbers converted (node_parameters)
+
+    def _parameter_values(self) -> dict[str, object]:
+        return {name: self.get_parameter(name).value for name in CONFIG_PARAMETERS}
+
+    def _read_config(self) -> Config:
+        return self._limits.apply(make_config(**self._parameter_values()))
+
+    def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        values = self._parameter_values()
+        values.update({p.name: p.value for p in parameters if p.name in CONFIG_PARAMETERS})
+        try:
+            make_config(**values)
+        except ValueError as error:
+            return SetParametersResult(successful=False, reason=str(error))
+        return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, parameters: list[Parameter]) -> None:
+        del parameters
+        self._config = self._read_config()  # the stream reads the period every tick
+
+    def destroy_node(self) -> None:
+        """Stop the request and stream threads, then destroy the node."""
+        self._request_thread.stop()
+        self._stream.stop()
+        super().destroy_node()
+
+
+def main(args: list[str] | None = None) -> int:
+    """
+    Run the generator until SIGINT/SIGTERM; return the exit status.
+
+    The signal handlers only set a flag that the spin loop checks every ``SIGNAL_POLL``
+    s: a signal that arrives while the node or the executor is being built interrupts
+    nothing half-made, and the node is then destroyed in order (exit status 0).
+    """
+    favour_calling_thread()  # before rclpy starts its threads: they inherit it
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+    sys.setswitchinterval(SWITCH_INTERVAL)
+    node = None
+    status = 0
+    gc.collect()  # before the stream runs: a full collection holds the GIL for ~30 ms
+    try:
+        node = TrajectoryGenerator()
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        # What exists now lives as long as the node: out of the collector's sight, later
+        # full collections (which hold the GIL, so the stream waits) stay short.
+        gc.freeze()
+        # The executor thread holds the GIL while it plans: preempted by a normal process
+        # then, it would keep the stream waiting. Below the stream's priority; set after
+        # rclpy started its DDS threads, which stay normal (nice -10) threads.
+        realtime_calling_thread(EXECUTOR_FIFO_PRIORITY)
+        while not stop.is_set():
+            executor.spin_once(timeout_sec=SIGNAL_POLL)
+    except ExternalShutdownException:
+        pass  # the context was shut down by someone else
+    except (ValueError, ParameterException) as error:
+        print(f'{NODE_NAME}: invalid parameters: {error}', file=sys.stderr)
+        status = 1
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return status
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,161 @@
+"""
+The node's parameters, each with one fixed type, its range and its rule.
+
+Every parameter is declared *statically typed*: its type never changes, so
+``ros2 param describe``/``get``/``dump`` always tell the truth. The rules:
+
+* a number given where a double is declared is stored as a double: ``ros2 param set
+  /trajectory_generator rate_hz 50`` (an integer on the command line) sets ``rate_hz`` to
+  ``50.0``, and an integer in a parameters file is read the same way;
+* a per-joint parameter (``max_velocity``, ``max_acceleration``, ``lspb_acceleration``,
+  ``max_jerk``, ``min_position``, ``max_position``) is a double array: one value for all
+  joints or one per joint. A single number (integer or double) is stored as a one-element
+  array;
+* any other type (a string, a bool, …) is refused by rclpy with
+  ``Wrong parameter type, expected 'Type.DOUBLE' got 'Type.STRING'``, and the parameter
+  keeps its value.
+
+The conversion is a *pre-set* callback (rclpy calls it before checking the type), and at
+start-up each parameter's override is converted before the parameter is declared.
+Scalars carry their range in the descriptor (``FloatingPointRange``), which rclpy enforces;
+per-joint arrays state their rule in ``description`` and ``additional_constraints``
+(rclpy checks no range on arrays; :mod:`traj_gen_ros.node.config` and
+:mod:`traj_gen_ros.node.robot_description` do).
+
+Units: rad (or m), rad/s, rad/s², rad/s³, Hz.
+"""
+
+from __future__ import annotations
+
+import math
+
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from traj_gen_ros.node.config import DEFAULT_MAX_JERK, MAX_RATE_HZ, MIN_RATE_HZ, PROFILES
+
+DEFAULT_JOINTS = [f'joint_{index}' for index in range(1, 7)]
+PER_JOINT = 'one value for all joints or one per joint'
+#: Parameters declared as doubles: an integer is stored as a double.
+DOUBLES = ('rate_hz',)
+#: Per-joint parameters, declared as double arrays: one number is stored as ``[number]``.
+DOUBLE_ARRAYS = ('initial_positions', 'max_velocity', 'max_acceleration', 'lspb_acceleration',
+                 'max_jerk', 'min_position', 'max_position')
+
+_DOUBLE = Parameter.Type.DOUBLE
+_DOUBLE_ARRAY = Parameter.Type.DOUBLE_ARRAY
+_TYPE_NAMES = {
+    ParameterType.PARAMETER_BOOL: 'a bool', ParameterType.PARAMETER_INTEGER: 'an integer',
+    ParameterType.PARAMETER_DOUBLE: 'a number (double)',
+    ParameterType.PARAMETER_STRING: 'a string',
+    ParameterType.PARAMETER_BYTE_ARRAY: 'a byte array',
+    ParameterType.PARAMETER_BOOL_ARRAY: 'a bool array',
+    ParameterType.PARAMETER_INTEGER_ARRAY: 'an integer array',
+    ParameterType.PARAMETER_DOUBLE_ARRAY: f'a number or a list of numbers ({PER_JOINT})',
+    ParameterType.PARAMETER_STRING_ARRAY: 'a list of strings',
+}
+_NUMBERS = (Parameter.Type.INTEGER, Parameter.Type.DOUBLE)
+_NUMBER_ARRAYS = (Parameter.Type.INTEGER_ARRAY, Parameter.Type.DOUBLE_ARRAY)
+
+
+def _per_joint(description: str, rule: str, unit: str) -> ParameterDescriptor:
+    return ParameterDescriptor(
+        description=f'{description} ({PER_JOINT}; {rule}; {unit}).',
+        type=ParameterType.PARAMETER_DOUBLE_ARRAY,
+        additional_constraints=f'{PER_JOINT}; {rule}; {unit}')
+
+
+def descriptors(joint_count: int) -> dict[str, tuple[object, ParameterDescriptor]]:
+    """Return every parameter's default value and descriptor, in declaration order."""
+    return {
+        'initial_positions': ([0.0] * max(joint_count, 1), ParameterDescriptor(
+            description='Start position per joint, rad or m (read only); empty means zeros.',
+            type=ParameterType.PARAMETER_DOUBLE_ARRAY, read_only=True,
+            additional_constraints='empty, or one finite value per joint; rad or m')),
+        'rate_hz': (100.0, ParameterDescriptor(
+            description='JointState stream rate and sample rate of ~/trajectory, Hz.',
+            type=ParameterType.PARAMETER_DOUBLE,
+            floating_point_range=[FloatingPointRange(from_value=MIN_RATE_HZ,
+                                                     to_value=MAX_RATE_HZ)])),
+        'profile': ('quintic', ParameterDescriptor(
+            description='Profile of the next plans.', type=ParameterType.PARAMETER_STRING,
+            additional_constraints=' | '.join(PROFILES))),
+        'via_velocities': ('heuristic', ParameterDescriptor(
+            description='Velocities at via points for cubic/quintic when none are given.',
+            type=ParameterType.PARAMETER_STRING,
+            additional_constraints='heuristic | continuous')),
+        'max_velocity': ([1.0], _per_joint(
+            'Velocity limit, used for timing and checked on every plan; a URDF velocity '
+            'limit lowers it', 'each finite and > 0', 'rad/s or m/s')),
+        'max_acceleration': ([2.0], _per_joint(
+            'Acceleration limit, used for timing, checked on every plan, and the braking '
+            'rate of ~/stop', 'each finite and > 0', 'rad/s^2 or m/s^2')),
+        'max_jerk': ([DEFAULT_MAX_JERK], _per_joint(
+            'Jerk limit of profile scurve: used for timing, checked on every scurve plan, and '
+            'the jerk bound of ~/stop with scurve', 'each finite and > 0', 'rad/s^3 or m/s^3')),
+        'lspb_acceleration': ([0.0], _per_joint(
+            'LSPB blend acceleration; 0 means max_acceleration',
+            'each 0 <= value <= max_acceleration', 'rad/s^2 or m/s^2')),
+        'min_position': ([-math.inf], _per_joint(
+            'Lower position limit; the URDF lower limit applies too, the tighter wins',
+            '-.inf means none, +inf not allowed', 'rad or m')),
+        'max_position': ([math.inf], _per_joint(
+            'Upper position limit; the URDF upper limit applies too, the tighter wins',
+            '.inf means none, -inf not allowed', 'rad or m')),
+        'robot_description': ('', ParameterDescriptor(
+            description='URDF of the robot (XML); its joint limits apply. A message on the '
+                        'robot_description topic replaces it; empty: none.',
+            type=ParameterType.PARAMETER_STRING)),
+    }
+
+
+def typed(parameter: Parameter) -> Parameter:
+    """
+    Return ``parameter`` with a number converted to the type its name is declared with.
+
+    ``rate_hz`` 50 → 50.0; ``max_velocity`` 2 or 2.0 → [2.0]; [1, 2] → [1.0, 2.0]. Other
+    parameters and other types are returned unchanged (rclpy then refuses a wrong type).
+    """
+    kind = parameter.type_
+    if parameter.name in DOUBLES and kind == Parameter.Type.INTEGER:
+        return Parameter(parameter.name, _DOUBLE, float(parameter.value))
+    if parameter.name in DOUBLE_ARRAYS:
+        if kind in _NUMBERS:
+            return Parameter(parameter.name, _DOUBLE_ARRAY, [float(parameter.value)])
+        if kind == Parameter.Type.INTEGER_ARRAY:
+            return Parameter(parameter.name, _DOUBLE_ARRAY, [float(v) for v in parameter.value])
+        if kind == Parameter.Type.BYTE_ARRAY and len(parameter.value) == 0:
+            return Parameter(parameter.name, _DOUBLE_ARRAY, [])  # [] is inferred as bytes
+    return parameter
+
+
+def typed_parameters(parameters: list[Parameter]) -> list[Parameter]:
+    """Pre-set callback: convert numbers to the declared types (:func:`typed`)."""
+    return [typed(parameter) for parameter in parameters]
+
+
+def declare_parameters(node: Node) -> None:
+    """
+    Declare the node's parameters, statically typed, and convert numbers from now on.
+
+    An override (parameters file, ``-p``) is read first and converted with :func:`typed`,
+    so ``rate_hz: 50`` in a file is the double 50.0; an empty per-joint array in a file
+    means the default. A value of another type raises ``ValueError`` saying what the
+    parameter must be (the node exits with status 1 and the reason).
+    """
+    joints = node.declare_parameter('joints', DEFAULT_JOINTS, ParameterDescriptor(
+        description='Joint names: the joint set and its order (read only).', read_only=True,
+        type=ParameterType.PARAMETER_STRING_ARRAY)).value
+    for name, (default, descriptor) in descriptors(len(joints or [])).items():
+        given = typed(node.declare_parameter(  # the override, if any, as it was given
+            name, None, ParameterDescriptor(dynamic_typing=True)))
+        node.undeclare_parameter(name)
+        value = given.value
+        if value is not None and given.type_.value != descriptor.type:
+            raise ValueError(f'{name} must be {_TYPE_NAMES[descriptor.type]}; got {value!r} '
+                             f'({_TYPE_NAMES.get(given.type_.value, given.type_.name)})')
+        if value is None or (name in DOUBLE_ARRAYS and given.type_ == _DOUBLE_ARRAY
+                             and len(value) == 0):
+            value = default
+        node.declare_parameter(name, value, descriptor, ignore_override=True)
+    node.add_pre_set_parameters_callback(typed_parameters)

@@ -1,0 +1,342 @@
+"""
+A request from its callback to the stream: parse → validate → plan → sample → splice.
+
+The goal and via-point callbacks run on the request thread
+(:mod:`traj_gen_ros.node.request_thread`), ``~/stop`` on the executor's; a lock lets one
+request through at a time. Each callback takes the request that woke it and every
+request waiting behind it (a burst is drained in one callback: only the newest can run),
+parses each (:mod:`traj_gen_ros.node.parsing`; a malformed one is refused at once),
+answers the older valid ones "superseded", and executes the newest right away:
+
+1. the start is the stream's next tick not yet published (or the request's future
+   ``header.stamp``), and the start state is the schedule's setpoint there;
+2. plan from that state (:mod:`traj_gen_ros.node.planning`), refusing with a reason;
+3. splice it into the schedule at the start (:mod:`traj_gen_ros.node.stream`): the stream
+   publishes its first setpoint at that tick;
+4. sample the plan for ``~/trajectory`` from its start and publish it, then the
+   OK status once the stream has published that setpoint (a client reading the answer
+   sees it started; a delayed start is answered at once) (:mod:`traj_gen_ros.node.answers`).
+
+Sampling comes after the splice so that it does not delay the start (a plan that reaches
+the splice has finite coefficients and finite, checked peaks, so its samples are finite),
+and after the first setpoint when that is due within ``SAMPLE_AFTER_FIRST_NS``, so that it
+does not hold the GIL while the stream thread publishes it.
+
+The start tick is the first one at least the median planning time of the last requests
+alike (kind, profile, and from rest or a moving state) away (so the plan is usually ready
+by then). If the stream published it while the request was being planned anyway (a cold
+cache, a long path, a loaded machine), the request is
+planned again from the setpoint the stream published last, exactly as published, and
+takes over at the next tick if ready by then: one period later, not a re-plan far ahead.
+After ``PLAN_ATTEMPTS`` such misses it is refused.
+"""
+
+from __future__ import annotations
+
+import collections
+from collections.abc import Callable, Sequence
+import statistics
+import threading
+import time
+
+from builtin_interfaces.msg import Duration
+import numpy as np
+from rclpy.serialization import deserialize_message
+from rclpy.subscription import Subscription
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from traj_gen_ros.core.kinematic_limits import JointError
+from traj_gen_ros.node.answers import Answers, Request
+from traj_gen_ros.node.config import Config
+from traj_gen_ros.node.parsing import (
+    MAX_VIA_POINTS,
+    parse_goal,
+    parse_via,
+    peek_via_points,
+    read_goal,
+    RequestError,
+    too_many_points,
+)
+from traj_gen_ros.node.planning import (
+    plan_request,
+    plan_stop,
+    PlannedMotion,
+    State,
+)
+from traj_gen_ros.node.stream import Stream
+from trajectory_msgs.msg import JointTrajectory
+
+#: Depth of the request subscriptions: a burst while the executor is busy is kept.
+REQUEST_DEPTH = 1000
+#: Rounds of request callbacks closer than this (s) are spaced out to it: under a flood
+#: the next round then drains a batch at once, so the executor thread holds the GIL less
+#: and the stream keeps its rate. A request after a quiet spell is not delayed.
+REQUEST_ROUND_PERIOD = 0.005
+#: A new motion starts at the first tick at least the median planning time of the last
+#: RECENT requests of its kind and profile, from rest or from a moving state as this one
+#: (several times longer), away, so that it is ready by then (a few hundred us: most
+#: often the very next tick; with no such request yet, the slowest RECENT of any kind).
+#: One whose start tick the stream published while it was planned is planned again, the
+#: first QUICK_RETRIES times if the attempt took at most RETRY_PERIODS periods: from the
+#: last published setpoint (to take over at the next tick), the second time only when the
+#: next tick is at least the (warm) attempt's time away, else from the first tick that
+#: is. Else, and after that, from a tick further away: twice the time the attempt took,
+#: and at least twice the margin before (a loaded machine whose planning times vary
+#: widely is caught up with), at most PLAN_ATTEMPTS times in all. Margins are capped at
+#: MAX_MARGIN_NS.
+RECENT = 5
+MAX_MARGIN_NS = 500_000_000
+PLAN_ATTEMPTS = 6
+RETRY_PERIODS = 2
+QUICK_RETRIES = 2
+#: The OK status waits at most this long (s) for the motion's first setpoint.
+ANSWER_WAIT = 0.1
+#: A motion whose first setpoint is due within this long (ns) is sampled for
+#: ``~/trajectory`` only once the stream has published that setpoint: sampling holds the
+#: GIL, which the stream thread needs at that tick (it went out 0.17 ms p50, 0.44 ms at
+#: worst after its tick when they overlapped, against 0.09 and 0.11 ms otherwise).
+SAMPLE_AFTER_FIRST_NS = 1_500_000
+
+#: Plans a motion for ``(config, start state, where unnamed joints rest)``.
+Planner = Callable[[Config, State, np.ndarray], PlannedMotion]
+
+
+def _seconds(duration: Duration) -> float:
+    return duration.sec + duration.nanosec * 1e-9
+
+
+class RequestHandler:
+    """Take requests off the subscriptions, plan the newest, splice it into the stream."""
+
+    def __init__(self, config: Callable[[], Config], stream: Stream, answers: Answers,
+                 now_ns: Callable[[], int], log_error: Callable[[str], None],
+                 elapsed_ns: Callable[[], int] = time.perf_counter_ns) -> None:
+        """
+        Handle requests with the current ``config()``, on the node clock ``now_ns()``.
+
+        ``elapsed_ns`` times the planning (ns; a test gives its fake clock).
+        """
+        self._elapsed_ns = elapsed_ns
+        self._config = config
+        self._stream = stream
+        self._answers = answers
+        self._now_ns = now_ns
+        self._log_error = log_error
+        self._last_round = 0.0  # time.monotonic() at the end of the last request callback
+        # Requests come from the request thread and ~/stop from the executor: one at a time.
+        self._lock = threading.Lock()
+        # How long the last requests of each (kind, profile, from a moving state), and of
+        # any, took to plan (ns).
+        self._recent_ns: dict[tuple[str, str, bool], collections.deque[int]] = {}
+        self._any_recent_ns: collections.deque[int] = collections.deque([0], maxlen=RECENT)
+
+    # ------------------------------------------------------------------ take and parse
+
+    def take(self, subscription: Subscription, message_type: type,
+             first: tuple[bytes, dict]) -> None:
+        """
+        Parse ``first`` and every request waiting behind it; execute the newest valid one.
+
+        Each is a ``(serialised message, message info)`` pair (the subscriptions are raw:
+        goals are read off the wire, via points counted before they are deserialised); the
+        info's ``received_timestamp`` (ns, system clock: when DDS received it) goes into
+        the answer as ``received``.
+        """
+        parse = via_request if message_type is JointTrajectory else goal_request
+        try:
+            with self._lock:
+                self._take_newest(subscription, message_type, first, parse)
+        finally:
+            self._pace()
+
+    def _take_newest(self, subscription: Subscription, message_type: type,
+                     first: tuple[bytes, dict],
+                     parse: Callable[[bytes, int, Sequence[str], Answers], Request | None]
+                     ) -> None:
+        """Drain the subscription after ``first``; execute the newest valid request."""
+        waiting = [first]
+        with subscription.handle:
+            for _ in range(REQUEST_DEPTH):
+                taken = subscription.handle.take_message(message_type, True)
+                if taken is None:
+                    break
+                waiting.append(taken)
+        joints = self._config().joints
+        parsed = [parse(message, info.get('received_timestamp', 0), joints, self._answers)
+                  for message, info in waiting]
+        parsed = [request for request in parsed if request is not None]
+        if parsed:
+            self._answers.superseded(parsed[:-1])
+            newest = parsed[-1]
+            self.execute(newest, lambda config, state, hold_at: plan_request(
+                config, state, hold_at, newest.request))
+
+    def _pace(self) -> None:
+        """End a request callback no sooner than ``REQUEST_ROUND_PERIOD`` after the last one."""
+        rest = self._last_round + REQUEST_ROUND_PERIOD - time.monotonic()
+        if rest > 0.0:
+            time.sleep(rest)
+        self._last_round = time.monotonic()
+
+    # ------------------------------------------------------------------ plan and splice
+
+    def execute(self, request: Request, plan: Planner) -> PlannedMotion | None:
+        """
+        Plan ``request`` from the stream's next tick, splice it in, sample it, answer it.
+
+        Returns the motion spliced in, or ``None`` when it was refused (answered ERROR).
+        """
+        config = self._config()
+        placed = self._plan_and_splice(request, plan, config)
+        if placed is None:
+            return None
+        motion, now_ns, start_ns, first_ns = placed
+        waited = first_ns - self._now_ns() <= SAMPLE_AFTER_FIRST_NS
+        if waited:
+            self._stream.wait_published(first_ns, ANSWER_WAIT)
+        try:
+            message = self._answers.trajectory(start_ns, motion, config.rate_hz)
+        except Exception as error:  # noqa: BLE001 - checked plans are finite: a bug if not
+            self._log_error(f'sampling an accepted {request.kind} failed: {error!r}; braking')
+            self._brake(config)
+            self._answers.refused(request, f'internal error: {error}')
+            return None
+        self._answers.publish_trajectory(message)
+        if not waited and first_ns - now_ns <= ANSWER_WAIT * 1e9:
+            self._stream.wait_published(first_ns, ANSWER_WAIT)
+        self._answers.accepted(request, motion, now_ns, first_ns)
+        return motion
+
+    def _plan_and_splice(self, request: Request, plan: Planner, config: Config
+                         ) -> tuple[PlannedMotion, int, int, int] | None:
+        """
+        Return the motion spliced in, when it was planned, its start and first tick (ns).
+
+        First from the tick at least the recent median planning time away. If the stream
+        published it meanwhile, up to ``QUICK_RETRIES`` times: again from the setpoint it
+        published last (a re-plan is faster than a cold first one: usually ready for the
+        next tick; after a warm miss, only if the next tick is that attempt's time away,
+        else from the first tick that is), unless planning took over ``RETRY_PERIODS``
+        periods (a long path); then, and after that, from a tick at least twice the last
+        attempt's time and twice the last margin away.
+        """
+        # Plans from rest are closed forms; from a moving state they take several times
+        # longer: each has its own history.
+        moving = self._stream.moving_at(self._stream.next_start())
+        recent_ns = self._recent_ns.setdefault((request.kind, config.profile, moving),
+                                               collections.deque(maxlen=RECENT))
+        # Nothing alike yet (the first preempting goal, say): the slowest of any kind.
+        margin_ns = int(statistics.median(recent_ns) if recent_ns else max(self._any_recent_ns))
+        start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
+        planning_ns = 0
+        for attempt in range(PLAN_ATTEMPTS):
+            began = self._elapsed_ns()
+            now_ns = self._now_ns()
+            state, hold_at = self._stream.state_at(start_ns)
+            try:
+                motion = plan(config, state, hold_at)
+            except RequestError as error:
+                self._answers.refused(request, str(error))
+                return None
+            except JointError as error:  # the core knows joints by index: name them
+                self._answers.refused(request, error.named(config.joints))
+                return None
+            except Exception as error:  # noqa: BLE001 - a bad request must never kill the node
+                self._log_error(f'unexpected failure planning {request.kind}: {error!r}')
+                self._answers.refused(request, f'internal error: {error}')
+                return None
+            elapsed_ns = self._elapsed_ns() - began
+            first_ns = self._stream.splice(start_ns, motion)
+            planning_ns += elapsed_ns
+            if first_ns is not None:
+                recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
+                self._any_recent_ns.append(recent_ns[-1])
+                request.values['planning_time'] = f'{planning_ns * 1e-9:.6f}'
+                request.values['attempts'] = str(attempt + 1)
+                return motion, now_ns, start_ns, first_ns
+            quick = attempt < QUICK_RETRIES and elapsed_ns <= RETRY_PERIODS * config.period_ns
+            if quick and attempt == 0:  # a warm re-plan is faster than this cold attempt
+                start_ns = max(request.stamp_ns, self._stream.last_published())
+            elif quick:  # this one was warm: the next takes about as long
+                if self._stream.next_start() - self._now_ns() >= elapsed_ns:
+                    start_ns = max(request.stamp_ns, self._stream.last_published())
+                else:
+                    start_ns = max(request.stamp_ns, self._stream.next_start(elapsed_ns))
+            else:
+                margin_ns = min(max(2 * elapsed_ns, 2 * margin_ns), MAX_MARGIN_NS)
+                start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
+        self._answers.refused(request, f'the stream passed its start {PLAN_ATTEMPTS} times '
+                              f'while it was planned (the last attempt took '
+                              f'{elapsed_ns * 1e-9:.3f} s); resend it')
+        return None
+
+    def _brake(self, config: Config) -> None:
+        """Brake from the next tick (after a failure nothing should cause)."""
+        start_ns = self._stream.next_start()
+        state, _ = self._stream.state_at(start_ns)
+        try:
+            self._stream.splice(start_ns, plan_stop(config, state))
+        except ValueError as error:  # a non-finite state: the stream holds its last setpoint
+            self._log_error(f'braking failed: {error!r}')
+
+    def stop(self, response: Trigger.Response) -> Trigger.Response:
+        """``~/stop``: brake within ``max_acceleration`` from the next tick, then hold."""
+        with self._lock:
+            request = Request('stop', self._answers.values('stop', ''), 0, None)
+            motion = self.execute(request, lambda config, state, _: plan_stop(config, state))
+        response.success = motion is not None
+        response.message = ('stopping: at rest in '
+                            f'{motion.plan.duration:.3f} s' if motion else 'stop failed')
+        return response
+
+
+def goal_request(data: bytes, received: int, joints: Sequence[str],
+                 answers: Answers) -> Request | None:
+    """
+    Read a serialised goal into a :class:`Request`, or refuse it (ERROR) and return ``None``.
+
+    ``received`` (ns, system clock) goes into its answers; ``joints`` is the joint set.
+    """
+    fields = read_goal(data)
+    if fields is None:  # not the usual little-endian CDR: let rclpy read it
+        try:
+            message = deserialize_message(data, JointState)
+        except Exception as error:  # noqa: BLE001 - wire bytes must never kill the node
+            answers.refused(Request('goal', answers.values('goal', '', received), 0, None),
+                            f'malformed message: {error}')
+            return None
+        fields = message.header.frame_id, message.name, message.position
+    frame_id, names, positions = fields
+    request = Request('goal', answers.values('goal', frame_id, received), 0, None)
+    try:
+        request.request = parse_goal(joints, names, positions)
+    except RequestError as error:
+        answers.refused(request, str(error))
+        return None
+    return request
+
+
+def via_request(data: bytes, received: int, joints: Sequence[str],
+                answers: Answers) -> Request | None:
+    """:func:`goal_request` for a serialised ``JointTrajectory``; a huge one is not built."""
+    frame_id, count = peek_via_points(data)
+    values = answers.values('via_points', frame_id, received)
+    if count > MAX_VIA_POINTS:  # refused before one Python object per point is made
+        answers.refused(Request('via_points', values, 0, None), too_many_points(count))
+        return None
+    try:
+        message = deserialize_message(data, JointTrajectory)
+    except Exception as error:  # noqa: BLE001 - bytes from the wire must never kill the node
+        answers.refused(Request('via_points', values, 0, None), f'malformed message: {error}')
+        return None
+    stamp = message.header.stamp
+    stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # 0 or past: "now"
+    request = Request('via_points', values, stamp_ns, None)
+    points = [(p.positions, p.velocities, p.accelerations, _seconds(p.time_from_start))
+              for p in message.points]
+    try:
+        request.request = parse_via(joints, message.joint_names, points)
+    except RequestError as error:
+        answers.refused(request, str(error))
+        return None
+    return request

@@ -1,0 +1,260 @@
+"""
+Step 5, *publish*: the setpoint on ``joint_states`` every ``1/rate_hz`` s, in its own thread.
+
+The :class:`Stream` owns the :class:`~traj_gen_ros.node.schedule.Schedule` and the thread that
+samples it. Each tick has a deadline on a fixed grid of the node clock (absolute times, so
+a late wake-up does not shift the ticks after it); at the deadline the thread samples the
+schedule at the current time and publishes the ``JointState`` bytes. A new motion is
+planned from the schedule's state at a tick the stream has not published yet
+(:meth:`Stream.next_start`), or at the last setpoint it published
+(:meth:`Stream.last_published`), and spliced in there (:meth:`Stream.splice`) if the
+stream has published nothing after it. So every setpoint published is the old motion's
+before the switch or the new one's after it (the last published setpoint, exactly both),
+and position, velocity and acceleration are continuous at the switch.
+
+On a busy machine the thread asks for a real-time priority (``SCHED_FIFO``) and, if that
+is not permitted, a lower nice value; if neither is, it runs as it is (see
+:func:`raise_priority`). Requests and planning run on the request thread: they hold the
+GIL for at most the interpreter's switch interval at a time while the stream waits for it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+import os
+import threading
+
+import numpy as np
+from traj_gen_ros.node.planning import held, PlannedMotion, State
+from traj_gen_ros.node.schedule import Schedule
+from traj_gen_ros.node.wire import joint_names_cdr, joint_state_cdr
+
+#: Real-time priority of the stream thread under ``SCHED_FIFO`` (1 lowest, 99 highest):
+#: above every normal process, below the kernel's own real-time threads.
+FIFO_PRIORITY = 10
+#: Real-time priority of the request and executor threads (planning): below the stream's.
+EXECUTOR_FIFO_PRIORITY = 5
+#: Nice value of the node's threads (the stream's when ``SCHED_FIFO`` is not permitted).
+STREAM_NICE = -10
+
+
+def favour_calling_thread(nice: int = STREAM_NICE) -> bool:
+    """
+    Lower the calling thread's nice value to ``nice`` if permitted; tell whether it did.
+
+    On Linux the nice value is per thread and threads started later inherit it: called
+    before ``rclpy.init()``, it covers the executor and the DDS threads too. Then a thread
+    holding the GIL is seldom preempted by normal processes, so the stream thread, which
+    needs the GIL for every tick, is not kept waiting for it on a busy machine.
+    """
+    try:
+        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), nice)
+    except (AttributeError, OSError):
+        return False
+    return True
+
+
+def realtime_calling_thread(priority: int) -> bool:
+    """
+    Put the calling thread under ``SCHED_FIFO`` at ``priority`` if permitted; tell if it did.
+
+    Needs ``CAP_SYS_NICE`` or a matching ``RLIMIT_RTPRIO``. On Linux it applies to the
+    calling thread only (threads it starts later inherit it).
+    """
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+    except (AttributeError, OSError):
+        return False
+    return True
+
+
+def raise_priority(priority: int = FIFO_PRIORITY) -> str:
+    """
+    Give the calling thread priority over normal processes if permitted; say what it got.
+
+    Tries ``SCHED_FIFO`` at ``priority``, then nice :data:`STREAM_NICE`. The stream thread
+    sleeps between ticks and needs well under a millisecond per tick, so it cannot starve
+    the machine.
+    """
+    if realtime_calling_thread(priority):
+        return f'SCHED_FIFO priority {priority}'
+    if favour_calling_thread(STREAM_NICE):
+        return f'nice {STREAM_NICE}'
+    return 'normal priority (not permitted to raise it)'
+
+
+class Stream:
+    """The schedule of motions and the thread that publishes its setpoint every period."""
+
+    def __init__(self, first: PlannedMotion, joint_names: Sequence[str],
+                 now_ns: Callable[[], int], period_ns: Callable[[], int],
+                 publish: Callable[[bytes], None], on_error: Callable[[str], None]) -> None:
+        """
+        Prepare to stream ``first`` (a hold); :meth:`start` starts the thread.
+
+        :param now_ns: the node clock, integer nanoseconds.
+        :param period_ns: the current stream period (read every tick: ``rate_hz`` may change).
+        :param publish: sends one serialised ``JointState``.
+        :param on_error: logs a failed publish (the stream goes on).
+        """
+        self._schedule = Schedule(first)
+        self._last_position = first.end.copy()  # the last setpoint published (rad)
+        self._names_cdr = joint_names_cdr(list(joint_names))
+        self._now_ns = now_ns
+        self._period_ns = period_ns
+        self._publish = publish
+        self._on_error = on_error
+        # Guards the schedule, the last published time and the next tick; notified when a
+        # setpoint has been published.
+        self._lock = threading.Lock()
+        self._published = threading.Condition(self._lock)
+        self._last_published_ns = -(2 ** 62)  # when the last setpoint was sampled
+        self._last_tick_ns = -(2 ** 62)  # the tick (deadline) it was published for
+        self._next_tick_ns = now_ns()
+        self.stopping = threading.Event()
+        self.priority = 'not started'
+        self._started = threading.Event()
+        self._thread = threading.Thread(target=self._run, name='stream', daemon=True)
+
+    def start(self) -> str:
+        """Start the streaming thread; return the priority it got (:func:`raise_priority`)."""
+        self._thread.start()
+        self._started.wait(1.0)
+        return self.priority
+
+    def stop(self, timeout: float = 2.0) -> None:
+        """Ask the thread to end and wait for it (s)."""
+        self.stopping.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout)
+
+    # ------------------------------------------------------------------ executor side
+
+    def next_start(self, margin_ns: int = 0) -> int:
+        """
+        Return the first tick (ns) not yet published and at least ``margin_ns`` from now.
+
+        A new motion spliced at that time is published by the stream at that tick.
+        """
+        period_ns = self._period_ns()
+        with self._lock:
+            tick, last = self._next_tick_ns, self._last_published_ns
+        earliest = max(last + 1, self._now_ns() + margin_ns)
+        if tick < earliest:
+            tick += -(-(earliest - tick) // period_ns) * period_ns
+        return tick
+
+    def state_at(self, time_ns: int) -> tuple[State, np.ndarray]:
+        """Return the setpoint at ``time_ns`` and where the schedule rests (rad) after it."""
+        with self._lock:
+            return self._schedule.state_at(time_ns), self._schedule.end_position(time_ns)
+
+    def moving_at(self, time_ns: int) -> bool:
+        """Tell whether the schedule is in motion at ``time_ns`` (a plan not yet at its end)."""
+        with self._lock:
+            return self._schedule.moving_at(time_ns)
+
+    def last_published(self) -> int:
+        """
+        Return when the last setpoint was sampled (ns): a start that nothing published follows.
+
+        The schedule's state then is exactly that setpoint, so a motion planned from it
+        and spliced there before the next tick (:meth:`splice`) continues it seamlessly.
+        """
+        with self._lock:
+            return self._last_published_ns
+
+    def splice(self, start_ns: int, motion: PlannedMotion) -> int | None:
+        """
+        Run ``motion`` from ``start_ns``; return the tick (ns) of its first setpoint.
+
+        That is ``start_ns`` itself if the stream has not got there yet, or the next tick
+        if ``start_ns`` is the last setpoint published. ``None``, splicing nothing, if the
+        stream has published a setpoint after ``start_ns``: the motion would jump.
+        """
+        with self._lock:
+            if self._last_published_ns > start_ns:
+                return None
+            first_ns = start_ns
+            if self._last_published_ns == start_ns:
+                first_ns = self._next_tick_ns
+                if first_ns <= self._last_tick_ns:  # the stream is between two ticks
+                    first_ns = self._last_tick_ns + self._period_ns()
+            self._schedule.splice(start_ns, motion, self._now_ns())
+            return first_ns
+
+    def wait_published(self, time_ns: int, timeout: float) -> bool:
+        """
+        Wait until the stream has published a setpoint at or after ``time_ns``.
+
+        At most ``timeout`` s; True once published. The node answers a request after its
+        first setpoint is out, so a client that reads the answer sees the motion started.
+        """
+        with self._published:
+            return self._published.wait_for(
+                lambda: self._last_published_ns >= time_ns or self.stopping.is_set(), timeout)
+
+    # ------------------------------------------------------------------ stream thread
+
+    def _wait_until(self, deadline_ns: int, period_ns: int) -> bool:
+        """
+        Sleep until ``deadline_ns`` on the node clock; False once the node is closing.
+
+        Waits on an event in steps of at most a period, so a simulated clock that runs
+        faster or slower than the wall clock is followed too.
+        """
+        while True:
+            remaining_ns = deadline_ns - self._now_ns()
+            if remaining_ns <= 0:
+                return not self.stopping.is_set()
+            if self.stopping.wait(min(remaining_ns, period_ns) * 1e-9):
+                return False
+
+    def _run(self) -> None:
+        """
+        Publish the setpoint at every tick of a fixed grid; late ticks are not caught up.
+
+        A tick a period or more late (a stalled machine, a simulated clock that jumps)
+        restarts the grid from now; no two setpoints carry the same stamp.
+        """
+        self.priority = raise_priority()
+        self._started.set()
+        next_ns = self._now_ns()
+        while True:
+            period_ns = self._period_ns()
+            next_ns += period_ns
+            with self._lock:
+                self._next_tick_ns = next_ns
+            if not self._wait_until(next_ns, period_ns):
+                return
+            try:
+                self._publish_tick(next_ns)
+            except Exception as error:  # noqa: BLE001 - the stream outlives any one failure
+                if self.stopping.is_set():
+                    return  # shutting down (SIGINT/SIGTERM): the publisher is gone
+                self._on_error(f'stream: publishing failed: {error!r}')
+            now_ns = self._now_ns()
+            if now_ns - next_ns >= period_ns:
+                next_ns = now_ns
+
+    def _publish_tick(self, tick_ns: int) -> None:
+        """Sample the schedule now and publish it as the setpoint of tick ``tick_ns``."""
+        with self._lock:
+            now_ns = self._now_ns()
+            if now_ns <= self._last_published_ns:
+                return  # the clock has not moved on (simulated time)
+            state = self._schedule.state_at(now_ns)
+            position, velocity = state.position, state.velocity
+            finite = np.count_nonzero(np.isfinite(position)) + \
+                np.count_nonzero(np.isfinite(velocity)) == 2 * position.size
+            if not finite:  # never published: hold the last setpoint from now on
+                position, velocity = self._last_position, np.zeros_like(self._last_position)
+                self._schedule.splice(now_ns, held(position), now_ns)
+            self._last_position = position
+            self._last_published_ns = now_ns
+            self._last_tick_ns = tick_ns
+        if not finite:
+            self._on_error('stream: the schedule gave a non-finite setpoint: holding')
+        self._publish(joint_state_cdr(now_ns, self._names_cdr, position, velocity))
+        with self._published:
+            self._published.notify_all()
