@@ -10,24 +10,22 @@ from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import JointState
 from traj_gen_ros import limit_violation, min_time, scurve_brake
 from traj_gen_ros.node.config import make_config
+from traj_gen_ros.node.motion import held, State
 from traj_gen_ros.node.parsing import (
     GoalRequest,
     parse_goal,
     parse_via,
-    peek_via_points,
-    read_goal,
     RequestError,
 )
 from traj_gen_ros.node.planning import (
-    held,
     plan_request,
     plan_stop,
     sample_grid,
     sample_motion,
-    State,
     via_points,
 )
 from traj_gen_ros.node.schedule import Schedule
+from traj_gen_ros.node.wire import peek_via_points, read_goal
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 JOINTS = ['a', 'b', 'c']
@@ -268,9 +266,9 @@ def test_preemption_keeps_position_and_velocity_continuous(requests):
     last = np.zeros(3)
     for number, (delay, target, profile) in enumerate(requests):
         now += int(delay * 1e9)
-        before = schedule.state_at(now - 1)
+        before = schedule.setpoint(now - 1)
         cfg = config(profile=profile)
-        state = schedule.state_at(now)
+        state = schedule.setpoint(now)
         try:
             motion = plan_request(cfg, state, schedule.end_position(now),
                                   GoalRequest(np.array([0, 2]), np.array([target, -target])))
@@ -280,11 +278,11 @@ def test_preemption_keeps_position_and_velocity_continuous(requests):
             continue
         schedule.splice(now, motion, now)
         last = motion.end
-        after = schedule.state_at(now)
+        after = schedule.setpoint(now)
         assert np.allclose(after.position, before.position, atol=1e-6)
         assert np.allclose(after.velocity, before.velocity, atol=1e-5)
         if profile == 'quintic':
             assert np.allclose(after.acceleration, state.acceleration, atol=1e-6)
-    end = schedule.state_at(now + 10**11)
+    end = schedule.setpoint(now + 10**11)
     assert end.position.tolist() == last.tolist()
     assert not end.velocity.any()

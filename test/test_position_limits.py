@@ -10,8 +10,9 @@ from traj_gen_ros.core.paths import plan_path
 from traj_gen_ros.core.stops import brake
 from traj_gen_ros.core.timing import hold
 from traj_gen_ros.node.config import make_config
+from traj_gen_ros.node.motion import State
 from traj_gen_ros.node.parsing import GoalRequest, RequestError, ViaRequest
-from traj_gen_ros.node.planning import plan_request, plan_stop, State
+from traj_gen_ros.node.planning import plan_request, plan_stop
 from traj_gen_ros.node.position_checks import check_plan, check_request, position_extrema
 from traj_gen_ros.node.urdf_limits import merge_limits, UrdfLimits
 

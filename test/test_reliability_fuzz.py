@@ -33,8 +33,9 @@ from reliability_cases import (
 )
 from sensor_msgs.msg import JointState
 from traj_gen_ros.node.config import DEFAULT_MAX_JERK, make_config
+from traj_gen_ros.node.motion import held
 from traj_gen_ros.node.parsing import parse_goal, parse_via, RequestError
-from traj_gen_ros.node.planning import held, plan_request, sample_motion
+from traj_gen_ros.node.planning import plan_request, sample_motion
 from traj_gen_ros.node.schedule import Schedule
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
@@ -100,7 +101,7 @@ def run_planning_cases(count: int, seed: int) -> dict:
             str(rng.choice(['heuristic', 'continuous'])), MAX_VELOCITY, MAX_ACCELERATION,
             float(rng.choice([0.0, 3.0])))
         now += int(rng.uniform(0.0, 0.6) * 1e9)
-        state = schedule.state_at(now)
+        state = schedule.setpoint(now)
         hold = schedule.end_position(now)
         case = make_case(rng, state.position)
         label = f'case {number} ({case.category}, {case.kind}, {config.profile})'

@@ -19,8 +19,9 @@ from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
 from traj_gen_ros.node.answers import Answers, Request
 from traj_gen_ros.node.config import make_config
+from traj_gen_ros.node.motion import held
 from traj_gen_ros.node.parsing import parse_goal
-from traj_gen_ros.node.planning import held, plan_request
+from traj_gen_ros.node.planning import plan_request
 from traj_gen_ros.node.request_handler import MAX_MARGIN_NS, RequestHandler, SAMPLE_AFTER_FIRST_NS
 from traj_gen_ros.node.stream import Stream
 from trajectory_msgs.msg import JointTrajectory
@@ -72,12 +73,12 @@ def goal(rig, positions, planning_ticks):
     request = parse_goal(JOINTS, JOINTS, positions)
     calls = []
 
-    def slow_planner(config, state, hold_at):
+    def slow_planner(config, state, hold_at, parsed):
         calls.append(state)
         if len(calls) == 1:
             for _ in range(planning_ticks):
                 rig.tick(late=30_000)
-        return plan_request(config, state, hold_at, request)
+        return plan_request(config, state, hold_at, parsed)
     values = rig.answers.values('goal', '', 0)
     return rig.handler.execute(Request('goal', values, 0, request), slow_planner), calls
 
@@ -132,10 +133,10 @@ def test_a_request_overtaken_every_time_is_refused_with_the_reason(node):
     rig.tick()
     request = parse_goal(JOINTS, JOINTS, [0.5, -0.2])
 
-    def always_late(config, state, hold_at):
+    def always_late(config, state, hold_at, parsed):
         for _ in range(MAX_MARGIN_NS // PERIOD + 2):  # beyond any start it was given
             rig.tick()
-        return plan_request(config, state, hold_at, request)
+        return plan_request(config, state, hold_at, parsed)
     values = rig.answers.values('goal', '', 0)
     assert rig.handler.execute(Request('goal', values, 0, request), always_late) is None
     level, text, _ = rig.statuses[-1]
@@ -152,9 +153,9 @@ def test_margins_from_rest_and_from_a_moving_state_are_kept_apart(node):
     def timed_goal(positions, planning_ns):
         request = parse_goal(JOINTS, JOINTS, positions)
 
-        def planner(config, state, hold_at):
+        def planner(config, state, hold_at, parsed):
             rig.clock[0] += planning_ns  # on the fake clock, no tick goes out meanwhile
-            return plan_request(config, state, hold_at, request)
+            return plan_request(config, state, hold_at, parsed)
         now = rig.clock[0]
         values = rig.answers.values('goal', '', 0)
         assert rig.handler.execute(Request('goal', values, 0, request), planner) is not None
@@ -191,11 +192,11 @@ def test_after_a_warm_miss_the_next_attempt_starts_one_attempt_away(node):
     request = parse_goal(JOINTS, JOINTS, [-0.3, 0.4])
     calls = []
 
-    def overtaken_twice(config, state, hold_at):
+    def overtaken_twice(config, state, hold_at, parsed):
         calls.append(rig.clock[0])
         if len(calls) <= 2:
             rig.tick(late=30_000)
-        return plan_request(config, state, hold_at, request)
+        return plan_request(config, state, hold_at, parsed)
     values = rig.answers.values('goal', '', 0)
     assert rig.handler.execute(Request('goal', values, 0, request), overtaken_twice)
     assert len(calls) == 3
@@ -231,8 +232,7 @@ def test_trajectory_is_sampled_after_a_first_setpoint_that_is_due_soon(node, due
     values = rig.answers.values('goal', '', 0)
     try:
         motion = rig.handler.execute(Request('goal', values, 0, request),
-                                     lambda config, state, hold_at:
-                                     plan_request(config, state, hold_at, request))
+                                     plan_request)
     finally:
         ticker.join(5.0)
     assert motion is not None and rig.statuses[-1][0] == DiagnosticStatus.OK

@@ -4,7 +4,7 @@ import numpy as np
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
 from traj_gen_ros.core.trajectory import Trajectory
-from traj_gen_ros.node.planning import held, PlannedMotion
+from traj_gen_ros.node.motion import held, PlannedMotion
 from traj_gen_ros.node.stream import Stream
 
 PERIOD = 10_000_000

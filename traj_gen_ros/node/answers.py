@@ -1,5 +1,5 @@
 """
-What the node says about each request: ``~/status`` and, for an accepted plan, ``~/trajectory``.
+Step 6 of a request, *answer*: ``~/status`` and, for an accepted plan, ``~/trajectory``.
 
 Every request gets exactly one answer on ``~/status`` (``diagnostic_msgs/DiagnosticStatus``,
 its ``values`` carry ``request``, ``request_id`` and ``frame_id`` so a client can match
@@ -23,7 +23,8 @@ from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from traj_gen_ros.node.planning import PlannedMotion, sample_motion
+from traj_gen_ros.node.motion import PlannedMotion
+from traj_gen_ros.node.planning import sample_motion
 from traj_gen_ros.node.wire import joint_trajectory_cdr
 from trajectory_msgs.msg import JointTrajectory
 

@@ -25,7 +25,7 @@ from std_msgs.msg import Header
 from traj_gen_ros.node.answers import Answers, Request
 from traj_gen_ros.node.config import Config
 from traj_gen_ros.node.diagnostics import MotionLog, node_status, RateMeter, RequestCounts
-from traj_gen_ros.node.planning import PlannedMotion
+from traj_gen_ros.node.motion import PlannedMotion
 from traj_gen_ros.node.robot_description import NodeLimits
 from traj_gen_ros.node.urdf_limits import describe_sources
 

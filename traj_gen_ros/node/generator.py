@@ -52,17 +52,17 @@ from std_srvs.srv import Trigger
 from traj_gen_ros.node.config import Config, initial_state, make_config
 from traj_gen_ros.node.diagnostics import RateMeter
 from traj_gen_ros.node.diagnostics_publisher import CountingAnswers, NodeDiagnostics
+from traj_gen_ros.node.motion import held
 from traj_gen_ros.node.parameters import declare_parameters
-from traj_gen_ros.node.planning import held
-from traj_gen_ros.node.request_handler import REQUEST_DEPTH, RequestHandler
-from traj_gen_ros.node.request_thread import NotForTheExecutor, RequestThread
-from traj_gen_ros.node.robot_description import NodeLimits
-from traj_gen_ros.node.stream import (
+from traj_gen_ros.node.realtime import (
     EXECUTOR_FIFO_PRIORITY,
     favour_calling_thread,
     realtime_calling_thread,
-    Stream,
 )
+from traj_gen_ros.node.request_handler import REQUEST_DEPTH, RequestHandler
+from traj_gen_ros.node.request_thread import NotForTheExecutor, RequestThread
+from traj_gen_ros.node.robot_description import NodeLimits
+from traj_gen_ros.node.stream import Stream
 from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'

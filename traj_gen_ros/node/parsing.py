@@ -1,13 +1,12 @@
 """
-Step 1 of a request, *parse*: message fields into a checked request (no ROS here).
+Step 2 of a request, *parse*: message fields into a checked request (no ROS here).
 
 :func:`parse_goal` turns the ``name``/``position`` fields of a ``sensor_msgs/JointState``
 into a :class:`GoalRequest`; :func:`parse_via` turns the points of a
 ``trajectory_msgs/JointTrajectory`` into a :class:`ViaRequest`. Each check that fails
 raises :class:`RequestError` saying what is wrong and what is valid: known joints, each
 named once, matching lengths, finite numbers, strictly increasing times, bounded sizes.
-:func:`peek_via_points` reads a message's point count off the wire, so a huge message is
-refused before it is deserialised.
+(The wire bytes are read in :mod:`traj_gen_ros.node.wire`.)
 
 Units: rad, rad/s, rad/s², s.
 """
@@ -17,7 +16,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 import math
-import struct
 
 import numpy as np
 
@@ -159,72 +157,3 @@ def too_many_points(count: int) -> str:
     """Give the refusal of a request with ``count`` > :data:`MAX_VIA_POINTS` points."""
     return (f'via_points has {count} points, above the limit of {MAX_VIA_POINTS}: split the '
             'path into several requests')
-
-
-def _string(data: bytes, offset: int, errors: str = 'strict') -> tuple[str, int]:
-    """
-    Read the CDR string at ``offset`` (from the end of the encapsulation header).
-
-    Returns it (UTF-8, decoded with ``errors``) and the offset after it.
-    """
-    offset = (offset + 3) & ~3
-    (length,) = struct.unpack_from('<I', data, 4 + offset)
-    if 4 + offset + 4 + length > len(data):
-        raise ValueError('string runs past the end of the message')
-    text = data[4 + offset + 4:4 + offset + 4 + max(length - 1, 0)].decode('utf-8', errors)
-    return text, offset + 4 + length
-
-
-def _count(data: bytes, offset: int) -> tuple[int, int]:
-    """Read the ``uint32`` sequence length at ``offset``, aligned to 4."""
-    offset = (offset + 3) & ~3
-    return struct.unpack_from('<I', data, 4 + offset)[0], offset + 4
-
-
-def read_goal(data: bytes) -> tuple[str, list[str], np.ndarray] | None:
-    """
-    Read ``header.frame_id``, ``name`` and ``position`` of a CDR ``JointState``.
-
-    Little-endian CDR (encapsulation ``00 01``, as rmw_fastrtps writes it), after the
-    4-byte encapsulation header: stamp (2 x 4 bytes), ``frame_id`` (uint32 length with
-    the NUL, bytes), ``name`` (uint32 count, strings), ``position`` (uint32 count, then
-    float64s aligned to 8); ``velocity`` and ``effort`` follow. Each uint32 is aligned to
-    4 from the end of the encapsulation header. ``None`` where the bytes are not that
-    (another encapsulation, cut short, not UTF-8): the caller deserialises those. Reading
-    the three fields costs a few microseconds; an rclpy message, tens.
-    """
-    if data[:2] != b'\x00\x01':
-        return None
-    try:
-        frame_id, offset = _string(data, 8)
-        count, offset = _count(data, offset)
-        names = []
-        for _ in range(count):
-            name, offset = _string(data, offset)
-            names.append(name)
-        count, offset = _count(data, offset)
-        offset = (offset + 7) & ~7 if count else offset
-        positions = np.frombuffer(data, '<f8', count, 4 + offset).astype(float)
-    except (ValueError, struct.error):  # UnicodeDecodeError is a ValueError
-        return None
-    return frame_id, names, positions
-
-
-def peek_via_points(data: bytes) -> tuple[str, int]:
-    """
-    Read ``header.frame_id`` and the number of points of a CDR ``JointTrajectory``.
-
-    Layout after the 4-byte encapsulation header: stamp (2 x 4 bytes), ``frame_id``
-    (uint32 length with the NUL, bytes), ``joint_names`` (uint32 count, strings), then the
-    uint32 point count; each uint32 aligned to 4 from the end of the encapsulation header.
-    A message too short to hold them gives ``('', 0)``: deserialising it then refuses it.
-    """
-    try:
-        frame_id, offset = _string(data, 8, 'replace')
-        names, offset = _count(data, offset)
-        for _ in range(names):
-            offset = _string(data, offset, 'replace')[1]
-        count = _count(data, offset)[0]
-    except (ValueError, struct.error):
-        return '', 0
-    return frame_id, count

@@ -1,5 +1,5 @@
 """
-Steps 2 and 3 of a request, *validate* and *plan*: a checked plan from a start state.
+Step 3 of a request, *validate and plan*: a checked plan from a start state.
 
 Every plan starts at a :class:`State` (the setpoint of the schedule at the stream tick where
 the new motion takes over) and ends at rest. The core's single entry points do the work:
@@ -25,18 +25,17 @@ Units: rad, rad/s, rad/s², rad/s³, s; arrays are ``(samples, joints)``.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 import math
-from typing import NamedTuple
 
 import numpy as np
 from traj_gen_ros.core.jerk_limited.brake import scurve_brake
 from traj_gen_ros.core.kinematic_limits import JointError, limit_violation
 from traj_gen_ros.core.paths import plan_path
 from traj_gen_ros.core.stops import brake
-from traj_gen_ros.core.timing import hold, min_time, shortest_duration
+from traj_gen_ros.core.timing import min_time, shortest_duration
 from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.config import Config
+from traj_gen_ros.node.motion import held, PlannedMotion, State
 from traj_gen_ros.node.parsing import GoalRequest, MAX_DURATION, RequestError, ViaRequest
 from traj_gen_ros.node.position_checks import check_plan, check_request
 
@@ -46,30 +45,6 @@ EXACTLY_TIMED = ('cubic', 'quintic')
 START_TOLERANCE = 1e-6
 #: Most samples one plan may have on ``~/trajectory`` (duration x rate_hz + 2).
 MAX_TRAJECTORY_POINTS = 200_000
-
-
-class State(NamedTuple):
-    """A setpoint: position (rad), velocity (rad/s) and acceleration (rad/s²) per joint."""
-
-    position: np.ndarray
-    velocity: np.ndarray
-    acceleration: np.ndarray
-
-
-@dataclass(frozen=True)
-class PlannedMotion:
-    """An accepted plan, where it ends (rad, at rest) and the words its status reports."""
-
-    plan: Trajectory
-    profile: str
-    end: np.ndarray
-    note: str = ''
-
-
-def held(position: Sequence[float], profile: str = 'hold', note: str = '') -> PlannedMotion:
-    """Stand still at ``position`` (rad): a zero-duration plan."""
-    position = np.array(position, dtype=float)
-    return PlannedMotion(hold(position), profile, position, note)
 
 
 def plan_request(config: Config, state: State, hold_at: np.ndarray,
@@ -354,7 +329,7 @@ def sample_grid(plan: Trajectory, rate_hz: float) -> np.ndarray:
 def sample_motion(motion: PlannedMotion, rate_hz: float
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """
-    Step 4, *sample*: the plan every ``1/rate_hz`` s from its start, for ``~/trajectory``.
+    Step 6, *sample*: the plan every ``1/rate_hz`` s from its start, for ``~/trajectory``.
 
     The last sample is exactly the end, at rest. Raises :class:`RequestError` if any
     sample is not finite (then nothing of the plan is published or executed).

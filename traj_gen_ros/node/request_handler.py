@@ -1,21 +1,25 @@
 """
-A request from its callback to the stream: parse → validate → plan → sample → splice.
+A request from its callback to the stream, in the six steps of docs/node-design.md.
 
 The goal and via-point callbacks run on the request thread
 (:mod:`traj_gen_ros.node.request_thread`), ``~/stop`` on the executor's; a lock lets one
-request through at a time. Each callback takes the request that woke it and every
-request waiting behind it (a burst is drained in one callback: only the newest can run),
-parses each (:mod:`traj_gen_ros.node.parsing`; a malformed one is refused at once),
-answers the older valid ones "superseded", and executes the newest right away:
+request through at a time.
 
-1. the start is the stream's next tick not yet published (or the request's future
-   ``header.stamp``), and the start state is the schedule's setpoint there;
-2. plan from that state (:mod:`traj_gen_ros.node.planning`), refusing with a reason;
-3. splice it into the schedule at the start (:mod:`traj_gen_ros.node.stream`): the stream
-   publishes its first setpoint at that tick;
-4. sample the plan for ``~/trajectory`` from its start and publish it, then the
-   OK status once the stream has published that setpoint (a client reading the answer
-   sees it started; a delayed start is answered at once) (:mod:`traj_gen_ros.node.answers`).
+1. *take* (:meth:`RequestHandler.take`): the request that woke the callback and every
+   request waiting behind it (a burst is drained in one callback: only the newest runs);
+2. *parse* (:func:`goal_request`, :func:`via_request`; :mod:`traj_gen_ros.node.parsing`,
+   the bytes read by :mod:`traj_gen_ros.node.wire`): a malformed one is refused at once;
+   the older valid ones are answered "superseded";
+3. *validate and plan* the newest (:data:`Planner`: :func:`plan_request` of
+   :mod:`traj_gen_ros.node.planning`, or :func:`brake_planner` for ``~/stop``) from the
+   schedule's setpoint at the start: the stream's next tick not yet published (or the
+   request's future ``header.stamp``), refusing with a reason;
+4. *splice* it into the schedule at the start (:meth:`Stream.splice`);
+5. the stream thread *publishes* its first setpoint at that tick
+   (:mod:`traj_gen_ros.node.stream`);
+6. *sample* the plan for ``~/trajectory`` from its start and publish it, then the OK
+   status once the stream has published that setpoint (a client reading the answer sees
+   it started; a delayed start is answered at once) (:mod:`traj_gen_ros.node.answers`).
 
 Sampling comes after the splice so that it does not delay the start (a plan that reaches
 the splice has finite coefficients and finite, checked peaks, so its samples are finite),
@@ -48,22 +52,17 @@ from std_srvs.srv import Trigger
 from traj_gen_ros.core.kinematic_limits import JointError
 from traj_gen_ros.node.answers import Answers, Request
 from traj_gen_ros.node.config import Config
+from traj_gen_ros.node.motion import PlannedMotion, State
 from traj_gen_ros.node.parsing import (
     MAX_VIA_POINTS,
     parse_goal,
     parse_via,
-    peek_via_points,
-    read_goal,
     RequestError,
     too_many_points,
 )
-from traj_gen_ros.node.planning import (
-    plan_request,
-    plan_stop,
-    PlannedMotion,
-    State,
-)
+from traj_gen_ros.node.planning import plan_request, plan_stop
 from traj_gen_ros.node.stream import Stream
+from traj_gen_ros.node.wire import peek_via_points, read_goal
 from trajectory_msgs.msg import JointTrajectory
 
 #: Depth of the request subscriptions: a burst while the executor is busy is kept.
@@ -97,8 +96,10 @@ ANSWER_WAIT = 0.1
 #: worst after its tick when they overlapped, against 0.09 and 0.11 ms otherwise).
 SAMPLE_AFTER_FIRST_NS = 1_500_000
 
-#: Plans a motion for ``(config, start state, where unnamed joints rest)``.
-Planner = Callable[[Config, State, np.ndarray], PlannedMotion]
+#: Step 2's planner: a motion for ``(config, start state, where the joints a request does
+#: not name rest, the parsed request)``; :func:`~traj_gen_ros.node.planning.plan_request`
+#: for goals and via points, :func:`brake_planner` for ``~/stop``.
+Planner = Callable[[Config, State, np.ndarray, object], PlannedMotion]
 
 
 def _seconds(duration: Duration) -> float:
@@ -168,8 +169,7 @@ class RequestHandler:
         if parsed:
             self._answers.superseded(parsed[:-1])
             newest = parsed[-1]
-            self.execute(newest, lambda config, state, hold_at: plan_request(
-                config, state, hold_at, newest.request))
+            self.execute(newest, plan_request)
 
     def _pace(self) -> None:
         """End a request callback no sooner than ``REQUEST_ROUND_PERIOD`` after the last one."""
@@ -232,9 +232,9 @@ class RequestHandler:
         for attempt in range(PLAN_ATTEMPTS):
             began = self._elapsed_ns()
             now_ns = self._now_ns()
-            state, hold_at = self._stream.state_at(start_ns)
+            state, hold_at = self._stream.start_state(start_ns)
             try:
-                motion = plan(config, state, hold_at)
+                motion = plan(config, state, hold_at, request.request)
             except RequestError as error:
                 self._answers.refused(request, str(error))
                 return None
@@ -273,7 +273,7 @@ class RequestHandler:
     def _brake(self, config: Config) -> None:
         """Brake from the next tick (after a failure nothing should cause)."""
         start_ns = self._stream.next_start()
-        state, _ = self._stream.state_at(start_ns)
+        state, _ = self._stream.start_state(start_ns)
         try:
             self._stream.splice(start_ns, plan_stop(config, state))
         except ValueError as error:  # a non-finite state: the stream holds its last setpoint
@@ -283,11 +283,18 @@ class RequestHandler:
         """``~/stop``: brake within ``max_acceleration`` from the next tick, then hold."""
         with self._lock:
             request = Request('stop', self._answers.values('stop', ''), 0, None)
-            motion = self.execute(request, lambda config, state, _: plan_stop(config, state))
+            motion = self.execute(request, brake_planner)
         response.success = motion is not None
         response.message = ('stopping: at rest in '
                             f'{motion.plan.duration:.3f} s' if motion else 'stop failed')
         return response
+
+
+def brake_planner(config: Config, state: State, hold_at: np.ndarray, parsed: None
+                  ) -> PlannedMotion:
+    """Plan ``~/stop``: brake from ``state`` and hold (:func:`plan_stop`; a :data:`Planner`)."""
+    del hold_at, parsed  # a stop ends where braking ends
+    return plan_stop(config, state)
 
 
 def goal_request(data: bytes, received: int, joints: Sequence[str],

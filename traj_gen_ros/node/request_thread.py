@@ -26,7 +26,7 @@ from rclpy.context import Context
 from rclpy.guard_condition import GuardCondition
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.subscription import Subscription
-from traj_gen_ros.node.stream import EXECUTOR_FIFO_PRIORITY, realtime_calling_thread
+from traj_gen_ros.node.realtime import EXECUTOR_FIFO_PRIORITY, realtime_calling_thread
 
 #: The thread wakes at least this often (ns) to see whether it should end.
 WAIT_NS = 100_000_000

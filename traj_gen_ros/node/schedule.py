@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 from traj_gen_ros.core.trajectory import state_at
-from traj_gen_ros.node.planning import PlannedMotion, State
+from traj_gen_ros.node.motion import PlannedMotion, State
 
 #: "Since forever": the start of the first motion (ns).
 BEGINNING_NS = -(2 ** 62)
@@ -34,7 +34,7 @@ class Schedule:
                 return start, motion
         return self._segments[0]
 
-    def state_at(self, time_ns: int) -> State:
+    def setpoint(self, time_ns: int) -> State:
         """Return the setpoint at ``time_ns``."""
         start, motion = self._segment(time_ns)
         elapsed = (time_ns - start) * 1e-9

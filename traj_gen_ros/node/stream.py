@@ -1,5 +1,5 @@
 """
-Step 5, *publish*: the setpoint on ``joint_states`` every ``1/rate_hz`` s, in its own thread.
+Steps 4 and 5, *splice* and *publish*: the setpoint every ``1/rate_hz`` s, in a thread.
 
 The :class:`Stream` owns the :class:`~traj_gen_ros.node.schedule.Schedule` and the thread that
 samples it. Each tick has a deadline on a fixed grid of the node clock (absolute times, so
@@ -13,74 +13,22 @@ before the switch or the new one's after it (the last published setpoint, exactl
 and position, velocity and acceleration are continuous at the switch.
 
 On a busy machine the thread asks for a real-time priority (``SCHED_FIFO``) and, if that
-is not permitted, a lower nice value; if neither is, it runs as it is (see
-:func:`raise_priority`). Requests and planning run on the request thread: they hold the
-GIL for at most the interpreter's switch interval at a time while the stream waits for it.
+is not permitted, a lower nice value; if neither is, it runs as it is
+(:func:`traj_gen_ros.node.realtime.raise_priority`). Requests and planning run on the
+request thread: they hold the GIL for at most the interpreter's switch interval at a time
+while the stream waits for it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-import os
 import threading
 
 import numpy as np
-from traj_gen_ros.node.planning import held, PlannedMotion, State
+from traj_gen_ros.node.motion import held, PlannedMotion, State
+from traj_gen_ros.node.realtime import raise_priority
 from traj_gen_ros.node.schedule import Schedule
 from traj_gen_ros.node.wire import joint_names_cdr, joint_state_cdr
-
-#: Real-time priority of the stream thread under ``SCHED_FIFO`` (1 lowest, 99 highest):
-#: above every normal process, below the kernel's own real-time threads.
-FIFO_PRIORITY = 10
-#: Real-time priority of the request and executor threads (planning): below the stream's.
-EXECUTOR_FIFO_PRIORITY = 5
-#: Nice value of the node's threads (the stream's when ``SCHED_FIFO`` is not permitted).
-STREAM_NICE = -10
-
-
-def favour_calling_thread(nice: int = STREAM_NICE) -> bool:
-    """
-    Lower the calling thread's nice value to ``nice`` if permitted; tell whether it did.
-
-    On Linux the nice value is per thread and threads started later inherit it: called
-    before ``rclpy.init()``, it covers the executor and the DDS threads too. Then a thread
-    holding the GIL is seldom preempted by normal processes, so the stream thread, which
-    needs the GIL for every tick, is not kept waiting for it on a busy machine.
-    """
-    try:
-        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), nice)
-    except (AttributeError, OSError):
-        return False
-    return True
-
-
-def realtime_calling_thread(priority: int) -> bool:
-    """
-    Put the calling thread under ``SCHED_FIFO`` at ``priority`` if permitted; tell if it did.
-
-    Needs ``CAP_SYS_NICE`` or a matching ``RLIMIT_RTPRIO``. On Linux it applies to the
-    calling thread only (threads it starts later inherit it).
-    """
-    try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
-    except (AttributeError, OSError):
-        return False
-    return True
-
-
-def raise_priority(priority: int = FIFO_PRIORITY) -> str:
-    """
-    Give the calling thread priority over normal processes if permitted; say what it got.
-
-    Tries ``SCHED_FIFO`` at ``priority``, then nice :data:`STREAM_NICE`. The stream thread
-    sleeps between ticks and needs well under a millisecond per tick, so it cannot starve
-    the machine.
-    """
-    if realtime_calling_thread(priority):
-        return f'SCHED_FIFO priority {priority}'
-    if favour_calling_thread(STREAM_NICE):
-        return f'nice {STREAM_NICE}'
-    return 'normal priority (not permitted to raise it)'
 
 
 class Stream:
@@ -144,10 +92,10 @@ class Stream:
             tick += -(-(earliest - tick) // period_ns) * period_ns
         return tick
 
-    def state_at(self, time_ns: int) -> tuple[State, np.ndarray]:
+    def start_state(self, time_ns: int) -> tuple[State, np.ndarray]:
         """Return the setpoint at ``time_ns`` and where the schedule rests (rad) after it."""
         with self._lock:
-            return self._schedule.state_at(time_ns), self._schedule.end_position(time_ns)
+            return self._schedule.setpoint(time_ns), self._schedule.end_position(time_ns)
 
     def moving_at(self, time_ns: int) -> bool:
         """Tell whether the schedule is in motion at ``time_ns`` (a plan not yet at its end)."""
@@ -243,7 +191,7 @@ class Stream:
             now_ns = self._now_ns()
             if now_ns <= self._last_published_ns:
                 return  # the clock has not moved on (simulated time)
-            state = self._schedule.state_at(now_ns)
+            state = self._schedule.setpoint(now_ns)
             position, velocity = state.position, state.velocity
             finite = np.count_nonzero(np.isfinite(position)) + \
                 np.count_nonzero(np.isfinite(velocity)) == 2 * position.size

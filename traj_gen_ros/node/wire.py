@@ -1,5 +1,9 @@
 """
-Serialise ``JointTrajectory`` and ``JointState`` messages in CDR, with numpy.
+The messages the node reads and writes in CDR, with numpy: its wire format in and out.
+
+Out: ``JointTrajectory`` and ``JointState``. In: a goal's ``frame_id``, names and
+positions (:func:`read_goal`), and a via request's point count (:func:`peek_via_points`),
+so a huge message is refused before it is deserialised.
 
 Building a 1000-point ``JointTrajectory`` as rclpy message objects costs tens of
 milliseconds (one Python object per point, one check per float). Its wire form is plain:
@@ -19,6 +23,7 @@ count and its elements.
 from __future__ import annotations
 
 from collections.abc import Sequence
+import struct
 
 import numpy as np
 
@@ -46,7 +51,7 @@ def _point_dtype(joint_count: int, starts_on_eight: bool) -> np.dtype:
     return np.dtype(fields)
 
 
-def _string(text: str, offset: int) -> bytes:
+def _write_string(text: str, offset: int) -> bytes:
     """Encode a CDR string written at payload ``offset`` (a multiple of 4)."""
     encoded = text.encode() + b'\x00'
     padding = (-(offset + 4 + len(encoded))) % 4
@@ -75,10 +80,10 @@ def joint_trajectory_cdr(
     seconds, nanoseconds = divmod(int(stamp_ns), _NANOSECONDS_PER_SECOND)
     head = bytearray(seconds.to_bytes(4, 'little', signed=True)
                      + nanoseconds.to_bytes(4, 'little'))
-    head += _string(frame_id, len(head))
+    head += _write_string(frame_id, len(head))
     head += len(joint_names).to_bytes(4, 'little')
     for name in joint_names:
-        head += _string(name, len(head))
+        head += _write_string(name, len(head))
     point_count, joint_count = positions.shape
     head += point_count.to_bytes(4, 'little')
     if point_count == 0:
@@ -123,8 +128,77 @@ def joint_state_cdr(stamp_ns: int, names_cdr: bytes, position: np.ndarray,
 def joint_names_cdr(joint_names: Sequence[str]) -> bytes:
     """Encode the empty ``frame_id`` and the ``name`` of a ``JointState``, without stamp."""
     head = bytearray(8)  # the stamp, written per message
-    head += _string('', len(head))
+    head += _write_string('', len(head))
     head += len(joint_names).to_bytes(4, 'little')
     for name in joint_names:
-        head += _string(name, len(head))
+        head += _write_string(name, len(head))
     return bytes(head[8:])
+
+
+def _read_string(data: bytes, offset: int, errors: str = 'strict') -> tuple[str, int]:
+    """
+    Read the CDR string at ``offset`` (from the end of the encapsulation header).
+
+    Returns it (UTF-8, decoded with ``errors``) and the offset after it.
+    """
+    offset = (offset + 3) & ~3
+    (length,) = struct.unpack_from('<I', data, 4 + offset)
+    if 4 + offset + 4 + length > len(data):
+        raise ValueError('string runs past the end of the message')
+    text = data[4 + offset + 4:4 + offset + 4 + max(length - 1, 0)].decode('utf-8', errors)
+    return text, offset + 4 + length
+
+
+def _read_count(data: bytes, offset: int) -> tuple[int, int]:
+    """Read the ``uint32`` sequence length at ``offset``, aligned to 4."""
+    offset = (offset + 3) & ~3
+    return struct.unpack_from('<I', data, 4 + offset)[0], offset + 4
+
+
+def read_goal(data: bytes) -> tuple[str, list[str], np.ndarray] | None:
+    """
+    Read ``header.frame_id``, ``name`` and ``position`` of a CDR ``JointState``.
+
+    Little-endian CDR (encapsulation ``00 01``, as rmw_fastrtps writes it), after the
+    4-byte encapsulation header: stamp (2 x 4 bytes), ``frame_id`` (uint32 length with
+    the NUL, bytes), ``name`` (uint32 count, strings), ``position`` (uint32 count, then
+    float64s aligned to 8); ``velocity`` and ``effort`` follow. Each uint32 is aligned to
+    4 from the end of the encapsulation header. ``None`` where the bytes are not that
+    (another encapsulation, cut short, not UTF-8): the caller deserialises those. Reading
+    the three fields costs a few microseconds; an rclpy message, tens.
+    """
+    if data[:2] != b'\x00\x01':
+        return None
+    try:
+        frame_id, offset = _read_string(data, 8)
+        count, offset = _read_count(data, offset)
+        names = []
+        for _ in range(count):
+            name, offset = _read_string(data, offset)
+            names.append(name)
+        count, offset = _read_count(data, offset)
+        offset = (offset + 7) & ~7 if count else offset
+        positions = np.frombuffer(data, '<f8', count, 4 + offset).astype(float)
+    except (ValueError, struct.error):  # UnicodeDecodeError is a ValueError
+        return None
+    return frame_id, names, positions
+
+
+def peek_via_points(data: bytes) -> tuple[str, int]:
+    """
+    Read ``header.frame_id`` and the number of points of a CDR ``JointTrajectory``.
+
+    Layout after the 4-byte encapsulation header: stamp (2 x 4 bytes), ``frame_id``
+    (uint32 length with the NUL, bytes), ``joint_names`` (uint32 count, strings), then the
+    uint32 point count; each uint32 aligned to 4 from the end of the encapsulation header.
+    A message too short to hold them gives ``('', 0)``: deserialising it then refuses it.
+    """
+    try:
+        frame_id, offset = _read_string(data, 8, 'replace')
+        names, offset = _read_count(data, offset)
+        for _ in range(names):
+            offset = _read_string(data, offset, 'replace')[1]
+        count = _read_count(data, offset)[0]
+    except (ValueError, struct.error):
+        return '', 0
+    return frame_id, count
