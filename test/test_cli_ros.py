@@ -18,6 +18,7 @@ from node_harness import (
 import numpy as np
 import pytest
 from test_cli import assert_one_line_error
+from traj_gen_ros.cli.ros import goal_from_args, via_from_args
 
 TIMEOUT = 120  # s per command: generous, the machine is shared
 
@@ -134,3 +135,14 @@ def test_no_node_or_no_message_exits_3():
                                           'unused.png', '--timeout', '1'), code=3)
     assert '/nobody/trajectory' in line
     assert not (REPO / 'unused.png').exists()
+
+
+def test_goal_and_via_words_become_names_positions_and_times():
+    names, positions = goal_from_args(['joint_2=0.4', 'joint_5=-90'], degrees=True)
+    assert names == ['joint_2', 'joint_5']
+    assert positions == pytest.approx([math.radians(0.4), -math.pi / 2])
+    points = via_from_args(['joint_1', 'joint_3'], [['0.2', '-0.1', '@1'], ['0.5', '0.3', '@2.5']],
+                           degrees=False)
+    assert points == [([0.2, -0.1], 1.0), ([0.5, 0.3], 2.5)]
+    assert via_from_args(['joint_1'], [['1'], ['2']], degrees=False) == [([1.0], 0.0),
+                                                                         ([2.0], 0.0)]

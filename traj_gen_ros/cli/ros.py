@@ -73,8 +73,13 @@ def _number(text: str, what: str) -> float:
     return value
 
 
-def parse_goal(items: list[str], degrees: bool) -> tuple[list[str], list[float]]:
-    """Parse ``JOINT=POSITION`` items into names and positions (rad)."""
+def goal_from_args(items: list[str], degrees: bool) -> tuple[list[str], list[float]]:
+    """
+    Read ``traj-gen goal``'s ``JOINT=POSITION`` words into names and positions (rad).
+
+    The command line's side only; the node reads the message it gets with
+    :func:`traj_gen_ros.node.parsing.parse_goal`.
+    """
     names, positions = [], []
     scale = math.radians(1.0) if degrees else 1.0
     for item in items:
@@ -86,10 +91,10 @@ def parse_goal(items: list[str], degrees: bool) -> tuple[list[str], list[float]]
     return names, positions
 
 
-def parse_via(joints: list[str], points: list[list[str]],
-              degrees: bool) -> list[tuple[list[float], float]]:
+def via_from_args(joints: list[str], points: list[list[str]],
+                  degrees: bool) -> list[tuple[list[float], float]]:
     """
-    Parse ``--point Q… [@T]`` groups into ``[(positions (rad), time (s)), …]``.
+    Read ``traj-gen via``'s ``--point Q… [@T]`` groups: ``[(positions (rad), time (s)), …]``.
 
     Either every point has ``@T`` or none has; with none every time is 0, which the node
     reads as "time the path from the limits".
@@ -165,11 +170,11 @@ def _request_message(args: argparse.Namespace) -> tuple[object, str, list[str], 
     """Build the request; return it, its kind, the named joints and their final targets."""
     token = f'traj-gen/{os.getpid()}/{secrets.token_hex(4)}'
     if args.command == 'goal':
-        names, positions = parse_goal(args.positions, args.degrees)
+        names, positions = goal_from_args(args.positions, args.degrees)
         message = JointState(name=names, position=positions)
         message.header.frame_id = token
         return message, 'goal', names, positions
-    points = parse_via(args.joints, args.points, args.degrees)
+    points = via_from_args(args.joints, args.points, args.degrees)
     message = JointTrajectory(joint_names=list(args.joints))
     message.header.frame_id = token
     for positions, when in points:
