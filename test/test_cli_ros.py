@@ -80,12 +80,25 @@ def test_goal_moves_the_node_and_prints_its_ok_status(probe, rest):
     assert len(ours) == 1 and ours[0].level == DiagnosticStatus.OK
 
 
-def test_goal_refusal_exits_1_with_the_reason(probe, rest):
+def refusal_line(result: subprocess.CompletedProcess) -> str:
+    """Return the one line of a refusal: exit 1, once on stdout, nothing on stderr."""
+    assert result.returncode == 1, (result.returncode, result.stdout, result.stderr)
+    assert result.stderr == ''
+    lines = result.stdout.splitlines()
+    assert len(lines) == 1, result.stdout
+    return lines[0]
+
+
+def test_goal_refusal_exits_1_and_prints_the_reason_once(probe, rest):
     result = traj_gen('goal', 'joint_9=1.0', '--timeout', '30')
-    line = assert_one_line_error(result, code=1)
-    assert "unknown joint 'joint_9'" in line and line.startswith('traj-gen goal: ')
-    assert result.stdout.startswith('ERROR: ')
+    line = refusal_line(result)
+    assert line == ("ERROR: goal refused: goal names unknown joint 'joint_9'; known joints: "
+                    f'{JOINTS}'), line
     assert position_after(probe, now_ns(probe)) == pytest.approx(rest)
+
+    status = json.loads(traj_gen('goal', 'joint_9=1.0', '--timeout', '30', '--json').stdout)
+    assert status['level'] == 'ERROR' and status['values']['request'] == 'goal'
+    assert status['message'] == line.removeprefix('ERROR: ')
 
 
 def test_via_passes_the_points_then_plot_topic_records_the_plan(probe, rest, tmp_path):
@@ -122,8 +135,8 @@ def test_via_passes_the_points_then_plot_topic_records_the_plan(probe, rest, tmp
 def test_via_refusal_exits_1_with_the_reason(probe, rest):
     result = traj_gen('via', '--joints', 'joint_1', '--point', '0.5', '@2', '--point', '0.2',
                       '@1', '--timeout', '30')
-    line = assert_one_line_error(result, code=1)
-    assert line.startswith('traj-gen via: via_points refused'), line
+    line = refusal_line(result)
+    assert line.startswith('ERROR: via_points refused: '), line
     assert position_after(probe, now_ns(probe)) == pytest.approx(rest)
 
 

@@ -11,10 +11,10 @@ boundary velocities) are one number for all joints or a comma list, one per join
 ``--durations`` (alias ``--duration``) gives one duration per segment. Joints are numbered
 from 0 (as in the solver's messages); points keep Craig's names from 1 (t1, θ̇12, t12).
 
-Exit codes: 0 success, 1 not accepted by the node, 2 bad arguments, a plan the solver
-refuses or a missing package (matplotlib for ``plot``), 3 no answer from ROS in time, 4 an
-internal error (a bug: please report it).
-Errors are one line on stderr.
+Exit codes: 0 success, 1 not accepted by the node (its answer, with the reason, on stdout
+as an acceptance is), 2 bad arguments, a plan the solver refuses or a missing package
+(matplotlib for ``plot``), 3 no answer from ROS in time, 4 an internal error (a bug: please
+report it). Errors of traj-gen itself are one line on stderr.
 """
 
 from __future__ import annotations
@@ -192,8 +192,9 @@ def build_parser() -> argparse.ArgumentParser:
     goal = commands.add_parser(
         'goal', help='send a goal to a running generator node',
         description='Publish a sensor_msgs/JointState goal to NODE/goal, wait for the '
-                    'matching NODE/status and print it. Exit 0 when accepted, 1 when '
-                    'refused (the reason on stderr), 3 when there is no answer.',
+                    'matching NODE/status and print it (on stdout, accepted or not). Exit '
+                    '0 when accepted, 1 when refused or superseded, 3 when there is no '
+                    'answer.',
         epilog=GOAL_EXAMPLES)
     goal.add_argument('positions', nargs='+', metavar='JOINT=POSITION',
                       help='target of each named joint; others keep their target')

@@ -221,12 +221,13 @@ def run_request(args: argparse.Namespace) -> int:
 
             status = _status_dict(session.wait(answer, args.timeout,
                                                f'no {node}/status for the {kind} request'))
+            # The node's answer, accepted or not, is the command's output (once, on
+            # stdout); the exit status says which. stderr is for traj-gen's own errors.
             if args.json:
                 print(json.dumps(status, indent=2))
             else:
                 print(f"{status['level']}: {status['message']}")
             if status['level'] != 'OK':
-                print(f"{command}: {status['message']}", file=sys.stderr)
                 return EXIT_REFUSED
             if args.wait:
                 _wait_for_end(session, states, status, names, targets, args.timeout)
