@@ -80,8 +80,8 @@ def test_solve_cubic_15_to_75_in_3_s_prints_the_lecture_coefficients():
 
     text = ok('solve', *CUBIC_ARGS)
     assert 'a0 + a1 t + a2 t² + a3 t³' in text
-    row = next(line for line in text.splitlines() if line.split()[:1] == ['0'])
-    assert row.split() == ['0', '15.0000', '0.0000', '20.0000', '-4.4444']
+    row = next(line for line in text.splitlines() if line.split()[:1] == ['joint_1'])
+    assert row.split() == ['joint_1', '15.0000', '0.0000', '20.0000', '-4.4444']
 
 
 def test_solve_lspb_via_reproduces_the_lecture_table():
@@ -101,6 +101,16 @@ def test_solve_lspb_via_reproduces_the_lecture_table():
         index = tokens.index(name)
         assert tokens[index + 1] == '=' and tokens[index + 2] == f'{value:.4f}', name
     assert '13.3975' in text and '-10.0000' in text and '-5.0862' in text
+    assert text.splitlines()[1] == 'joint_1: |θ̈| = 50.0000 deg/s²'
+
+
+def test_tables_name_joints_joint_1_joint_2():
+    text = ok('solve', 'min-time', '--points', '0,0', '1,2', '--max-velocity', '1',
+              '--max-acceleration', '2')
+    assert [line.split(':')[0] for line in text.splitlines() if line.startswith('joint')] == [
+        'joint_1', 'joint_2']
+    text = ok('solve', 'quintic', '--points', '0,0', '1,-0.5', '--duration', '2')
+    assert [line.split()[0] for line in text.splitlines()[-2:]] == ['joint_1', 'joint_2']
 
 
 def test_solve_in_radians_matches_degrees_scaled():
@@ -123,7 +133,7 @@ def test_solve_multi_joint_points_with_negative_values_and_min_time():
 
     timed = solve_json('min-time', '--points', '0,0', '1,2', '--max-velocity', '1',
                        '--max-acceleration', '2', '--shape', 'lspb')
-    # Joint 1 binds: D = 2 >= v²/a, so T = D/v + v/a = 2.5 s; joint 0 is stretched to it.
+    # joint_2 binds: D = 2 >= v²/a, so T = D/v + v/a = 2.5 s; joint_1 is stretched to it.
     assert timed['duration'] == pytest.approx(2.5)
     assert timed['profile'] == 'min-time lspb'
     assert max(abs(v) for v in timed['linear_velocities'][1]) == pytest.approx(1.0)
@@ -233,10 +243,11 @@ def test_the_matplotlib_named_in_that_error_is_the_pinned_one():
     assert MATPLOTLIB_REQUIREMENT in pins
 
 
-def test_solver_refusal_names_the_fix():
+def test_solver_refusal_names_the_fix_and_the_joint():
     line = assert_one_line_error(traj_gen('solve', *LSPB_ARGS[:-3], '--acceleration', '5',
                                           '--degrees'))
-    assert 'smallest acceleration that fits is' in line and 'lspb' in line
+    assert line.startswith("traj-gen solve: error: lspb: lspb_via: joint 'joint_1': "), line
+    assert line.endswith('the smallest acceleration that fits is 15.91'), line
 
 
 @pytest.mark.parametrize('command', ['solve', 'plot', 'goal', 'via'])

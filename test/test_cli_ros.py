@@ -18,7 +18,9 @@ from node_harness import (
 import numpy as np
 import pytest
 from test_cli import assert_one_line_error
+from traj_gen_ros.cli.common import joint_names
 from traj_gen_ros.cli.ros import goal_from_args, via_from_args
+from traj_gen_ros.node.parameters import DEFAULT_JOINTS
 
 TIMEOUT = 120  # s per command: generous, the machine is shared
 
@@ -159,3 +161,8 @@ def test_goal_and_via_words_become_names_positions_and_times():
     assert points == [([0.2, -0.1], 1.0), ([0.5, 0.3], 2.5)]
     assert via_from_args(['joint_1'], [['1'], ['2']], degrees=False) == [([1.0], 0.0),
                                                                          ([2.0], 0.0)]
+
+
+def test_offline_joint_names_are_the_nodes_default_joints():
+    assert joint_names(len(DEFAULT_JOINTS)) == DEFAULT_JOINTS
+    assert joint_names(2) == ['joint_1', 'joint_2']

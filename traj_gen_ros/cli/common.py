@@ -1,5 +1,5 @@
 """
-The pieces ``traj-gen``'s offline and ROS commands share: exit codes, errors, reports.
+The pieces ``traj-gen``'s offline and ROS commands share: exit codes, errors, joint names, reports.
 
 Used by :mod:`traj_gen_ros.cli.main` and :mod:`traj_gen_ros.cli.ros`. Its own module so that
 ``cli_ros`` needs nothing from ``cli`` (``cli`` imports ``cli_ros`` only when a ROS
@@ -24,6 +24,16 @@ class UsageError(Exception):
         """Keep ``message`` and the program (``traj-gen goal`` ...) it is about."""
         super().__init__(message)
         self.prog = prog
+
+
+def joint_names(count: int) -> list[str]:
+    """
+    Return the names ``traj-gen`` gives ``count`` joints: ``joint_1``, ``joint_2``, ….
+
+    The node's convention (its default ``joints`` parameter), so that a plan solved
+    offline and one recorded from the node name their joints alike.
+    """
+    return [f'joint_{index}' for index in range(1, count + 1)]
 
 
 def report_plot(info: dict, as_json: bool) -> None:

@@ -8,8 +8,9 @@ imports rclpy only when one of them runs).
 Argument grammar: every ``--points`` value is one point; a point of several joints is
 written with commas (``--points 0,0 1,2 0.5,-1``). Per-joint values (acceleration, limits,
 boundary velocities) are one number for all joints or a comma list, one per joint.
-``--durations`` (alias ``--duration``) gives one duration per segment. Joints are numbered
-from 0 (as in the solver's messages); points keep Craig's names from 1 (t1, θ̇12, t12).
+``--durations`` (alias ``--duration``) gives one duration per segment. Joints are named
+joint_1, joint_2, … in the order of a point's values (as the node's default joints); points
+keep Craig's names from 1 (t1, θ̇12, t12).
 
 Exit codes: 0 success, 1 not accepted by the node (its answer, with the reason, on stdout
 as an acceptance is), 2 bad arguments, a plan the solver refuses or a missing package

@@ -13,7 +13,7 @@ import argparse
 
 import numpy as np
 from traj_gen_ros import core
-from traj_gen_ros.cli.common import UsageError
+from traj_gen_ros.cli.common import joint_names, UsageError
 
 
 class Plan:
@@ -103,6 +103,8 @@ def make_plan(args: argparse.Namespace) -> Plan:
             trajectory, times = _scurve(args, path, joint_values)
         else:
             trajectory, times = _min_time(args, path, joint_values)
+    except core.JointError as error:  # the core knows joints by index: name them as the node does
+        raise UsageError(f'{profile}: {error.named(joint_names(joints))}') from None
     except ValueError as error:
         raise UsageError(f'{profile}: {error}') from None
     if profile == 'min-time':

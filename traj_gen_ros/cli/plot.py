@@ -17,6 +17,7 @@ matplotlib.use('Agg')
 
 import matplotlib.pyplot as plt  # noqa: E402  (the backend must be chosen first)
 import numpy as np  # noqa: E402
+from traj_gen_ros.cli.common import joint_names as default_joint_names  # noqa: E402
 
 DPI = 100
 PANELS = ('position', 'velocity', 'acceleration')
@@ -87,7 +88,7 @@ def plot_trajectory(trajectory: object, output: str, *, unit: str = 'rad',
     :param marks: ``(times (points,), positions (points, joints))`` to mark.
     :param size: image size in pixels, ``(width, height)``.
     :param title: figure title.
-    :param joint_names: legend names, default ``joint 0``, ``joint 1``, ….
+    :param joint_names: legend names, default ``joint_1``, ``joint_2``, … (the node's).
     :param jerk: add a fourth panel, jerk (for S-curve plans).
     :return: what was written (see :func:`plot_samples`).
     """
@@ -116,13 +117,13 @@ def plot_samples(times: np.ndarray, positions: np.ndarray, velocities: np.ndarra
     :param blends: per joint, ``(start, end)`` intervals to shade on every panel.
     :param size: image size in pixels, ``(width, height)``, at :data:`DPI`.
     :param title: figure title.
-    :param joint_names: legend names, default ``joint 0``, ``joint 1``, ….
+    :param joint_names: legend names, default ``joint_1``, ``joint_2``, … (the node's).
     :param jerks: ``(n, joints)`` jerk samples: a fourth panel when given.
     :return: ``{'output', 'width', 'height', 'panels', 'joints'}``; ``panels`` lists the
         figure's axes by their y labels.
     """
     joints = positions.shape[1]
-    names = list(joint_names) if joint_names else [f'joint {j}' for j in range(joints)]
+    names = list(joint_names) if joint_names else default_joint_names(joints)
     width, height = size
     series = [positions, velocities, accelerations]
     labels = [f'position [{unit}]', f'velocity [{unit}/s]', f'acceleration [{unit}/s²]']
