@@ -8,9 +8,13 @@ import subprocess
 import sys
 
 import matplotlib.image as mpimg
+import matplotlib.pyplot as plt
 import numpy as np
 import pytest
-from traj_gen_ros.cli.main import MATPLOTLIB_REQUIREMENT
+from traj_gen_ros import core
+from traj_gen_ros.cli import plot
+from traj_gen_ros.cli.main import build_parser, MATPLOTLIB_REQUIREMENT
+from traj_gen_ros.cli.plan import make_plan
 
 REPO = Path(__file__).resolve().parents[1]
 TIMEOUT = 120  # s per command: generous, the machine is shared
@@ -171,6 +175,62 @@ def test_plot_writes_a_png_of_the_given_size_with_three_panels(tmp_path, args):
         inside = image[top + 3:bottom - 2, 100:780, :3]
         curve = (inside.max(axis=2) - inside.min(axis=2)) > 0.3  # coloured, not grey/white
         assert curve.any(axis=1).mean() > 0.3, panel  # a trajectory line crosses the panel
+
+
+def legend_covers(figure) -> list:
+    """
+    Return what the figure's one legend covers, in display coordinates (pixels).
+
+    The axes its box overlaps and every point of a drawn line (curves and marks) inside it:
+    both empty when the legend stands beside the panels.
+    """
+    figure.canvas.draw()
+    legend, = figure.legends
+    box = legend.get_window_extent()
+    corners = box.get_points()
+    assert all(figure.bbox.contains(x, y) for x, y in corners), (box, figure.bbox)  # not cut
+    covered = [panel.get_ylabel() for panel in figure.axes
+               if box.overlaps(panel.get_window_extent())]
+    for panel in figure.axes:
+        for line in panel.get_lines():
+            points = line.get_transform().transform(line.get_xydata())
+            covered += [(line.get_label(), x, y) for x, y in points if box.contains(x, y)]
+    return covered
+
+
+def marks_of(figure, gid: str) -> tuple[list, list]:
+    """Return the times and positions marked ``gid`` on the position panel, all joints."""
+    lines = [line for line in figure.axes[0].get_lines() if line.get_gid() == gid]
+    return ([list(line.get_xdata()) for line in lines],
+            [list(line.get_ydata()) for line in lines])
+
+
+def test_plot_legend_stands_beside_the_panels_and_via_points_are_marked():
+    plan = make_plan(build_parser().parse_args(['plot', *LSPB_ARGS, '-o', 'unused.png']))
+    figure = plot.draw_trajectory(plan.trajectory, marks=(plan.point_times, plan.points),
+                                  unit=plan.unit, size=(800, 600))
+    try:
+        assert legend_covers(figure) == []
+        assert [text.get_text() for text in figure.legends[0].get_texts()] == [
+            'joint_1', 'start, goal', 'via points', 'blends']
+        assert marks_of(figure, 'via points') == ([[2.0, 3.0]], [[35.0, 25.0]])
+        assert marks_of(figure, 'start, goal') == ([[0.0, 6.0]], [[10.0, 10.0]])
+    finally:
+        plt.close(figure)
+
+
+def test_plot_legend_of_six_joints_covers_no_line():
+    # The issue's goal: joint_5 to -1.0 (and joint_2 to 0.4), the other joints at 0.
+    goal = np.array([0.0, 0.4, 0.0, 0.0, -1.0, 0.0])
+    figure = plot.draw_trajectory(core.quintic(np.zeros(6), goal, 1.0),
+                                  marks=([0.0, 1.0], np.array([np.zeros(6), goal])))
+    try:
+        assert legend_covers(figure) == []
+        assert [text.get_text() for text in figure.legends[0].get_texts()] == [
+            *(f'joint_{joint}' for joint in range(1, 7)), 'start, goal']
+        assert marks_of(figure, 'via points') == ([], [])
+    finally:
+        plt.close(figure)
 
 
 def test_plot_shades_lspb_blends(tmp_path):

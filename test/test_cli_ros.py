@@ -7,6 +7,7 @@ import sys
 
 from diagnostic_msgs.msg import DiagnosticStatus
 import matplotlib.image as mpimg
+import matplotlib.pyplot as plt
 from node_harness import (
     generator_session,
     JOINTS,
@@ -17,9 +18,9 @@ from node_harness import (
 )
 import numpy as np
 import pytest
-from test_cli import assert_one_line_error
+from test_cli import assert_one_line_error, legend_covers, marks_of
 from traj_gen_ros.cli.common import joint_names
-from traj_gen_ros.cli.ros import goal_from_args, via_from_args
+from traj_gen_ros.cli.ros import goal_from_args, topic_figure, via_from_args
 from traj_gen_ros.node.parameters import DEFAULT_JOINTS
 
 TIMEOUT = 120  # s per command: generous, the machine is shared
@@ -80,6 +81,20 @@ def test_goal_moves_the_node_and_prints_its_ok_status(probe, rest):
     assert position_after(probe, now_ns(probe)) == pytest.approx(target, abs=1e-9)
     ours = statuses_of(probe, 'goal')[answered:]
     assert len(ours) == 1 and ours[0].level == DiagnosticStatus.OK
+
+    # plot --topic's figure of this plan: the legend beside it covers no line (joint_5's
+    # at -20° included), and start and goal are marked.
+    plan = probe.spin_until(lambda: next(
+        (t for t in reversed(probe.trajectories) if t.points
+         and t.points[-1].positions[4] == pytest.approx(math.radians(-20))), None), 30, 'plan')
+    figure = topic_figure(plan, '/trajectory_generator/trajectory', True, (900, 900))
+    try:
+        assert legend_covers(figure) == []
+        times, positions = marks_of(figure, 'start, goal')
+        assert times[4] == pytest.approx([0.0, seconds(plan.points[-1].time_from_start)])
+        assert positions[4] == pytest.approx([math.degrees(rest[4]), -20.0])
+    finally:
+        plt.close(figure)
 
 
 def refusal_line(result: subprocess.CompletedProcess) -> str:

@@ -23,6 +23,7 @@ import re
 import secrets
 import sys
 import time
+from typing import TYPE_CHECKING
 
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticStatus
@@ -39,6 +40,9 @@ from traj_gen_ros.cli.common import (
     UsageError,
 )
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+if TYPE_CHECKING:  # matplotlib is imported only when a plot is made
+    from matplotlib.figure import Figure
 
 _AT_GOAL = 1e-6  # rad: the motion has ended when the named joints are this close, at rest
 _LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
@@ -278,16 +282,27 @@ def run_plot_topic(args: argparse.Namespace) -> int:
     message = received[0]
     if not message.points:
         raise UsageError(f'the trajectory on {topic} has no points')
-    times, positions, velocities, accelerations = trajectory_arrays(message)
-    scale = 180.0 / math.pi if args.degrees else 1.0
-    info = plotting.plot_samples(
-        times, positions * scale, velocities * scale, accelerations * scale, args.output,
-        unit='deg' if args.degrees else 'rad',
-        marks=(times[[0, -1]], positions[[0, -1]] * scale), size=args.size,
-        title=f'{topic}: {len(times)} points, {times[-1]:.3g} s',
-        joint_names=list(message.joint_names))
-    report_plot(info, args.json)
+    figure = topic_figure(message, topic, args.degrees, args.size)
+    report_plot(plotting.write_png(figure, args.output, len(message.joint_names)), args.json)
     return EXIT_OK
+
+
+def topic_figure(message: object, topic: str, degrees: bool, size: tuple[int, int]) -> Figure:
+    """
+    Return the figure ``plot --topic`` writes of a JointTrajectory received on ``topic``.
+
+    Its start and end are marked; the message holds samples only, not the points of the
+    request it was planned from.
+    """
+    from traj_gen_ros.cli import plot as plotting  # matplotlib: loaded only when a plot is made
+
+    times, positions, velocities, accelerations = trajectory_arrays(message)
+    scale = 180.0 / math.pi if degrees else 1.0
+    return plotting.draw_samples(
+        times, positions * scale, velocities * scale, accelerations * scale,
+        unit='deg' if degrees else 'rad', marks=(times[[0, -1]], positions[[0, -1]] * scale),
+        size=size, title=f'{topic}: {len(times)} points, {times[-1]:.3g} s',
+        joint_names=list(message.joint_names))
 
 
 def trajectory_arrays(message: object
