@@ -1,9 +1,9 @@
 """
-The pieces ``traj-gen``'s offline and ROS commands share: exit codes, errors, joint names, reports.
+What ``traj-gen``'s offline and ROS commands share: exit codes, errors, joint names, reports.
 
 Used by :mod:`traj_gen_ros.cli.main` and :mod:`traj_gen_ros.cli.ros`. Its own module so that
-``cli_ros`` needs nothing from ``cli`` (``cli`` imports ``cli_ros`` only when a ROS
-command runs, so the offline commands need no ROS).
+``ros`` needs nothing from ``main`` (``main`` imports ``ros`` only when a ROS command runs,
+so the offline commands need no ROS).
 """
 
 from __future__ import annotations
@@ -15,6 +15,10 @@ EXIT_REFUSED = 1
 EXIT_USAGE = 2
 EXIT_NO_ANSWER = 3
 EXIT_INTERNAL = 4
+
+
+class NoAnswerError(Exception):
+    """Nothing arrived from ROS in time: one line on stderr, exit status 3."""
 
 
 class UsageError(Exception):

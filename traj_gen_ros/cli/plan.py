@@ -38,6 +38,15 @@ def _per_joint(values: list[float] | None, name: str, joints: int,
     return np.broadcast_to(np.asarray(values, dtype=float), (joints,))
 
 
+def _segment_durations(durations: list[float], points: int) -> np.ndarray:
+    """Return ``--durations`` as an array; UsageError unless there is one per segment."""
+    segments = points - 1
+    if len(durations) != segments:
+        raise UsageError(f'{points} points need {segments} duration'
+                         f'{"s" if segments > 1 else ""}, got {len(durations)}')
+    return np.array(durations, dtype=float)
+
+
 def make_plan(args: argparse.Namespace) -> Plan:
     """Plan ``args.profile`` with the core solver; raise UsageError on refusal."""
     if not args.points:
@@ -63,11 +72,7 @@ def make_plan(args: argparse.Namespace) -> Plan:
     def durations(single: bool) -> np.ndarray:
         if args.durations is None:
             raise UsageError(f'{profile} needs --duration{"" if single else "s"}')
-        segments = len(points) - 1
-        if len(args.durations) != segments:
-            raise UsageError(f'{len(points)} points need {segments} duration'
-                             f'{"s" if segments > 1 else ""}, got {len(args.durations)}')
-        return np.array(args.durations, dtype=float)
+        return _segment_durations(args.durations, len(points))
 
     try:
         if profile in ('cubic', 'quintic'):
@@ -128,9 +133,8 @@ def _scurve(args: argparse.Namespace, path: np.ndarray,
     if args.velocities != 'heuristic':
         raise UsageError('scurve takes --velocities heuristic only (zero acceleration at '
                          'every via point)')
-    if args.durations is not None and len(args.durations) != len(path) - 1:
-        raise UsageError(f'{len(path)} points need {len(path) - 1} duration'
-                         f'{"s" if len(path) > 2 else ""}, got {len(args.durations)}')
+    if args.durations is not None:
+        _segment_durations(args.durations, len(path))
     start = {'v0': joint_values('v0'), 'a0': joint_values('a0')}
     if len(path) == 2 and args.durations is None:
         trajectory = core.min_time(path[0], path[1], limits[0], limits[1], 'scurve',

@@ -21,7 +21,6 @@ import math
 import os
 import re
 import secrets
-import sys
 import time
 from typing import TYPE_CHECKING
 
@@ -33,9 +32,9 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from traj_gen_ros.cli.common import (
-    EXIT_NO_ANSWER,
     EXIT_OK,
     EXIT_REFUSED,
+    NoAnswerError,
     report_plot,
     UsageError,
 )
@@ -47,10 +46,6 @@ if TYPE_CHECKING:  # matplotlib is imported only when a plot is made
 _AT_GOAL = 1e-6  # rad: the motion has ended when the named joints are this close, at rest
 _LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
 _SPIN_PERIOD = 0.05
-
-
-class NoAnswerError(Exception):
-    """Nothing arrived in time: exit status 3."""
 
 
 def node_name(text: str) -> str:
@@ -65,6 +60,12 @@ def joint_states_topic(node: str) -> str:
     """Return ``joint_states`` in the namespace of ``node`` (the node's default topic)."""
     namespace = node.rsplit('/', 1)[0]
     return f'{namespace}/joint_states'
+
+
+def _check_timeout(timeout: float) -> None:
+    """Refuse a ``--timeout`` that is not > 0 s (UsageError)."""
+    if not timeout > 0:
+        raise UsageError('--timeout must be > 0 s')
 
 
 def _number(text: str, what: str) -> float:
@@ -191,53 +192,47 @@ def _request_message(args: argparse.Namespace) -> tuple[object, str, list[str], 
 
 def run_request(args: argparse.Namespace) -> int:
     """``traj-gen goal`` / ``traj-gen via``: publish, wait for the status, print it."""
-    command = f'traj-gen {args.command}'
     node = node_name(args.node)
-    if args.timeout <= 0:
-        raise UsageError('--timeout must be > 0 s')
+    _check_timeout(args.timeout)
     message, kind, names, targets = _request_message(args)
-    try:
-        with _session() as session:
-            ros = session.node
-            statuses: list = []
-            states: list = []
-            publisher = ros.create_publisher(type(message), f'{node}/{kind}', 10)
-            status_sub = ros.create_subscription(
-                DiagnosticStatus, f'{node}/status', statuses.append, _reliable(100))
-            if args.wait:
-                ros.create_subscription(JointState, args.joint_states or joint_states_topic(node),
-                                        states.append, _reliable(10))
-            session.wait(lambda: publisher.get_subscription_count() > 0
-                         and status_sub.get_publisher_count() > 0, args.timeout,
-                         f'{node} is not subscribed to {node}/{kind} (is the node running, '
-                         'with the same ROS_DOMAIN_ID?)')
-            seen = len(statuses)
-            publisher.publish(message)
+    with _session() as session:
+        ros = session.node
+        statuses: list = []
+        states: list = []
+        publisher = ros.create_publisher(type(message), f'{node}/{kind}', 10)
+        status_sub = ros.create_subscription(
+            DiagnosticStatus, f'{node}/status', statuses.append, _reliable(100))
+        if args.wait:
+            ros.create_subscription(JointState, args.joint_states or joint_states_topic(node),
+                                    states.append, _reliable(10))
+        session.wait(lambda: publisher.get_subscription_count() > 0
+                     and status_sub.get_publisher_count() > 0, args.timeout,
+                     f'{node} is not subscribed to {node}/{kind} (is the node running, '
+                     'with the same ROS_DOMAIN_ID?)')
+        seen = len(statuses)
+        publisher.publish(message)
 
-            def ours(status: object) -> bool:
-                values = {pair.key: pair.value for pair in status.values}
-                return (status.name == node and values.get('request') == kind
-                        and values.get('frame_id', message.header.frame_id)
-                        == message.header.frame_id)
+        def ours(status: object) -> bool:
+            values = {pair.key: pair.value for pair in status.values}
+            return (status.name == node and values.get('request') == kind
+                    and values.get('frame_id', message.header.frame_id)
+                    == message.header.frame_id)
 
-            def answer() -> object:
-                return next((s for s in statuses[seen:] if ours(s)), None)
+        def answer() -> object:
+            return next((s for s in statuses[seen:] if ours(s)), None)
 
-            status = _status_dict(session.wait(answer, args.timeout,
-                                               f'no {node}/status for the {kind} request'))
-            # The node's answer, accepted or not, is the command's output (once, on
-            # stdout); the exit status says which. stderr is for traj-gen's own errors.
-            if args.json:
-                print(json.dumps(status, indent=2))
-            else:
-                print(f"{status['level']}: {status['message']}")
-            if status['level'] != 'OK':
-                return EXIT_REFUSED
-            if args.wait:
-                _wait_for_end(session, states, status, names, targets, args.timeout)
-    except NoAnswerError as error:
-        print(f'{command}: {error}', file=sys.stderr)
-        return EXIT_NO_ANSWER
+        status = _status_dict(session.wait(answer, args.timeout,
+                                           f'no {node}/status for the {kind} request'))
+        # The node's answer, accepted or not, is the command's output (once, on
+        # stdout); the exit status says which. stderr is for traj-gen's own errors.
+        if args.json:
+            print(json.dumps(status, indent=2))
+        else:
+            print(f"{status['level']}: {status['message']}")
+        if status['level'] != 'OK':
+            return EXIT_REFUSED
+        if args.wait:
+            _wait_for_end(session, states, status, names, targets, args.timeout)
     return EXIT_OK
 
 
@@ -266,19 +261,14 @@ def run_plot_topic(args: argparse.Namespace) -> int:
     """``traj-gen plot --topic``: plot one JointTrajectory (transient local) from a topic."""
     from traj_gen_ros.cli import plot as plotting  # matplotlib: loaded only when a plot is made
 
-    if args.timeout <= 0:
-        raise UsageError('--timeout must be > 0 s')
+    _check_timeout(args.timeout)
     topic = args.topic if args.topic.startswith('/') else '/' + args.topic
     received: list = []
-    try:
-        with _session() as session:
-            session.node.create_subscription(JointTrajectory, topic, received.append,
-                                             _reliable(1, transient_local=True))
-            session.wait(lambda: received, args.timeout,
-                         f'no trajectory_msgs/JointTrajectory on {topic}')
-    except NoAnswerError as error:
-        print(f'traj-gen plot: {error}', file=sys.stderr)
-        return EXIT_NO_ANSWER
+    with _session() as session:
+        session.node.create_subscription(JointTrajectory, topic, received.append,
+                                         _reliable(1, transient_local=True))
+        session.wait(lambda: received, args.timeout,
+                     f'no trajectory_msgs/JointTrajectory on {topic}')
     message = received[0]
     if not message.points:
         raise UsageError(f'the trajectory on {topic} has no points')
