@@ -8,9 +8,13 @@ import subprocess
 import sys
 
 import matplotlib.image as mpimg
+import matplotlib.pyplot as plt
 import numpy as np
 import pytest
-from traj_gen_ros.cli.main import MATPLOTLIB_REQUIREMENT
+from traj_gen_ros import core
+from traj_gen_ros.cli import plot
+from traj_gen_ros.cli.main import build_parser, MATPLOTLIB_REQUIREMENT
+from traj_gen_ros.cli.plan import make_plan
 
 REPO = Path(__file__).resolve().parents[1]
 TIMEOUT = 120  # s per command: generous, the machine is shared
@@ -80,8 +84,8 @@ def test_solve_cubic_15_to_75_in_3_s_prints_the_lecture_coefficients():
 
     text = ok('solve', *CUBIC_ARGS)
     assert 'a0 + a1 t + a2 t² + a3 t³' in text
-    row = next(line for line in text.splitlines() if line.split()[:1] == ['0'])
-    assert row.split() == ['0', '15.0000', '0.0000', '20.0000', '-4.4444']
+    row = next(line for line in text.splitlines() if line.split()[:1] == ['joint_1'])
+    assert row.split() == ['joint_1', '15.0000', '0.0000', '20.0000', '-4.4444']
 
 
 def test_solve_lspb_via_reproduces_the_lecture_table():
@@ -101,6 +105,16 @@ def test_solve_lspb_via_reproduces_the_lecture_table():
         index = tokens.index(name)
         assert tokens[index + 1] == '=' and tokens[index + 2] == f'{value:.4f}', name
     assert '13.3975' in text and '-10.0000' in text and '-5.0862' in text
+    assert text.splitlines()[1] == 'joint_1: |θ̈| = 50.0000 deg/s²'
+
+
+def test_tables_name_joints_joint_1_joint_2():
+    text = ok('solve', 'min-time', '--points', '0,0', '1,2', '--max-velocity', '1',
+              '--max-acceleration', '2')
+    assert [line.split(':')[0] for line in text.splitlines() if line.startswith('joint')] == [
+        'joint_1', 'joint_2']
+    text = ok('solve', 'quintic', '--points', '0,0', '1,-0.5', '--duration', '2')
+    assert [line.split()[0] for line in text.splitlines()[-2:]] == ['joint_1', 'joint_2']
 
 
 def test_solve_in_radians_matches_degrees_scaled():
@@ -123,7 +137,7 @@ def test_solve_multi_joint_points_with_negative_values_and_min_time():
 
     timed = solve_json('min-time', '--points', '0,0', '1,2', '--max-velocity', '1',
                        '--max-acceleration', '2', '--shape', 'lspb')
-    # Joint 1 binds: D = 2 >= v²/a, so T = D/v + v/a = 2.5 s; joint 0 is stretched to it.
+    # joint_2 binds: D = 2 >= v²/a, so T = D/v + v/a = 2.5 s; joint_1 is stretched to it.
     assert timed['duration'] == pytest.approx(2.5)
     assert timed['profile'] == 'min-time lspb'
     assert max(abs(v) for v in timed['linear_velocities'][1]) == pytest.approx(1.0)
@@ -161,6 +175,62 @@ def test_plot_writes_a_png_of_the_given_size_with_three_panels(tmp_path, args):
         inside = image[top + 3:bottom - 2, 100:780, :3]
         curve = (inside.max(axis=2) - inside.min(axis=2)) > 0.3  # coloured, not grey/white
         assert curve.any(axis=1).mean() > 0.3, panel  # a trajectory line crosses the panel
+
+
+def legend_covers(figure) -> list:
+    """
+    Return what the figure's one legend covers, in display coordinates (pixels).
+
+    The axes its box overlaps and every point of a drawn line (curves and marks) inside it:
+    both empty when the legend stands beside the panels.
+    """
+    figure.canvas.draw()
+    legend, = figure.legends
+    box = legend.get_window_extent()
+    corners = box.get_points()
+    assert all(figure.bbox.contains(x, y) for x, y in corners), (box, figure.bbox)  # not cut
+    covered = [panel.get_ylabel() for panel in figure.axes
+               if box.overlaps(panel.get_window_extent())]
+    for panel in figure.axes:
+        for line in panel.get_lines():
+            points = line.get_transform().transform(line.get_xydata())
+            covered += [(line.get_label(), x, y) for x, y in points if box.contains(x, y)]
+    return covered
+
+
+def marks_of(figure, gid: str) -> tuple[list, list]:
+    """Return the times and positions marked ``gid`` on the position panel, all joints."""
+    lines = [line for line in figure.axes[0].get_lines() if line.get_gid() == gid]
+    return ([list(line.get_xdata()) for line in lines],
+            [list(line.get_ydata()) for line in lines])
+
+
+def test_plot_legend_stands_beside_the_panels_and_via_points_are_marked():
+    plan = make_plan(build_parser().parse_args(['plot', *LSPB_ARGS, '-o', 'unused.png']))
+    figure = plot.draw_trajectory(plan.trajectory, marks=(plan.point_times, plan.points),
+                                  unit=plan.unit, size=(800, 600))
+    try:
+        assert legend_covers(figure) == []
+        assert [text.get_text() for text in figure.legends[0].get_texts()] == [
+            'joint_1', 'start, goal', 'via points', 'blends']
+        assert marks_of(figure, 'via points') == ([[2.0, 3.0]], [[35.0, 25.0]])
+        assert marks_of(figure, 'start, goal') == ([[0.0, 6.0]], [[10.0, 10.0]])
+    finally:
+        plt.close(figure)
+
+
+def test_plot_legend_of_six_joints_covers_no_line():
+    # The issue's goal: joint_5 to -1.0 (and joint_2 to 0.4), the other joints at 0.
+    goal = np.array([0.0, 0.4, 0.0, 0.0, -1.0, 0.0])
+    figure = plot.draw_trajectory(core.quintic(np.zeros(6), goal, 1.0),
+                                  marks=([0.0, 1.0], np.array([np.zeros(6), goal])))
+    try:
+        assert legend_covers(figure) == []
+        assert [text.get_text() for text in figure.legends[0].get_texts()] == [
+            *(f'joint_{joint}' for joint in range(1, 7)), 'start, goal']
+        assert marks_of(figure, 'via points') == ([], [])
+    finally:
+        plt.close(figure)
 
 
 def test_plot_shades_lspb_blends(tmp_path):
@@ -233,10 +303,11 @@ def test_the_matplotlib_named_in_that_error_is_the_pinned_one():
     assert MATPLOTLIB_REQUIREMENT in pins
 
 
-def test_solver_refusal_names_the_fix():
+def test_solver_refusal_names_the_fix_and_the_joint():
     line = assert_one_line_error(traj_gen('solve', *LSPB_ARGS[:-3], '--acceleration', '5',
                                           '--degrees'))
-    assert 'smallest acceleration that fits is' in line and 'lspb' in line
+    assert line.startswith("traj-gen solve: error: lspb: lspb_via: joint 'joint_1': "), line
+    assert line.endswith('the smallest acceleration that fits is 15.91'), line
 
 
 @pytest.mark.parametrize('command', ['solve', 'plot', 'goal', 'via'])

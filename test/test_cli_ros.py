@@ -7,6 +7,7 @@ import sys
 
 from diagnostic_msgs.msg import DiagnosticStatus
 import matplotlib.image as mpimg
+import matplotlib.pyplot as plt
 from node_harness import (
     generator_session,
     JOINTS,
@@ -17,7 +18,10 @@ from node_harness import (
 )
 import numpy as np
 import pytest
-from test_cli import assert_one_line_error
+from test_cli import assert_one_line_error, legend_covers, marks_of
+from traj_gen_ros.cli.common import joint_names
+from traj_gen_ros.cli.ros import goal_from_args, topic_figure, via_from_args
+from traj_gen_ros.node.parameters import DEFAULT_JOINTS
 
 TIMEOUT = 120  # s per command: generous, the machine is shared
 
@@ -78,13 +82,40 @@ def test_goal_moves_the_node_and_prints_its_ok_status(probe, rest):
     ours = statuses_of(probe, 'goal')[answered:]
     assert len(ours) == 1 and ours[0].level == DiagnosticStatus.OK
 
+    # plot --topic's figure of this plan: the legend beside it covers no line (joint_5's
+    # at -20° included), and start and goal are marked.
+    plan = probe.spin_until(lambda: next(
+        (t for t in reversed(probe.trajectories) if t.points
+         and t.points[-1].positions[4] == pytest.approx(math.radians(-20))), None), 30, 'plan')
+    figure = topic_figure(plan, '/trajectory_generator/trajectory', True, (900, 900))
+    try:
+        assert legend_covers(figure) == []
+        times, positions = marks_of(figure, 'start, goal')
+        assert times[4] == pytest.approx([0.0, seconds(plan.points[-1].time_from_start)])
+        assert positions[4] == pytest.approx([math.degrees(rest[4]), -20.0])
+    finally:
+        plt.close(figure)
 
-def test_goal_refusal_exits_1_with_the_reason(probe, rest):
+
+def refusal_line(result: subprocess.CompletedProcess) -> str:
+    """Return the one line of a refusal: exit 1, once on stdout, nothing on stderr."""
+    assert result.returncode == 1, (result.returncode, result.stdout, result.stderr)
+    assert result.stderr == ''
+    lines = result.stdout.splitlines()
+    assert len(lines) == 1, result.stdout
+    return lines[0]
+
+
+def test_goal_refusal_exits_1_and_prints_the_reason_once(probe, rest):
     result = traj_gen('goal', 'joint_9=1.0', '--timeout', '30')
-    line = assert_one_line_error(result, code=1)
-    assert "unknown joint 'joint_9'" in line and line.startswith('traj-gen goal: ')
-    assert result.stdout.startswith('ERROR: ')
+    line = refusal_line(result)
+    assert line == ("ERROR: goal refused: goal names unknown joint 'joint_9'; known joints: "
+                    f'{JOINTS}'), line
     assert position_after(probe, now_ns(probe)) == pytest.approx(rest)
+
+    status = json.loads(traj_gen('goal', 'joint_9=1.0', '--timeout', '30', '--json').stdout)
+    assert status['level'] == 'ERROR' and status['values']['request'] == 'goal'
+    assert status['message'] == line.removeprefix('ERROR: ')
 
 
 def test_via_passes_the_points_then_plot_topic_records_the_plan(probe, rest, tmp_path):
@@ -121,8 +152,8 @@ def test_via_passes_the_points_then_plot_topic_records_the_plan(probe, rest, tmp
 def test_via_refusal_exits_1_with_the_reason(probe, rest):
     result = traj_gen('via', '--joints', 'joint_1', '--point', '0.5', '@2', '--point', '0.2',
                       '@1', '--timeout', '30')
-    line = assert_one_line_error(result, code=1)
-    assert line.startswith('traj-gen via: via_points refused'), line
+    line = refusal_line(result)
+    assert line.startswith('ERROR: via_points refused: '), line
     assert position_after(probe, now_ns(probe)) == pytest.approx(rest)
 
 
@@ -134,3 +165,19 @@ def test_no_node_or_no_message_exits_3():
                                           'unused.png', '--timeout', '1'), code=3)
     assert '/nobody/trajectory' in line
     assert not (REPO / 'unused.png').exists()
+
+
+def test_goal_and_via_words_become_names_positions_and_times():
+    names, positions = goal_from_args(['joint_2=0.4', 'joint_5=-90'], degrees=True)
+    assert names == ['joint_2', 'joint_5']
+    assert positions == pytest.approx([math.radians(0.4), -math.pi / 2])
+    points = via_from_args(['joint_1', 'joint_3'], [['0.2', '-0.1', '@1'], ['0.5', '0.3', '@2.5']],
+                           degrees=False)
+    assert points == [([0.2, -0.1], 1.0), ([0.5, 0.3], 2.5)]
+    assert via_from_args(['joint_1'], [['1'], ['2']], degrees=False) == [([1.0], 0.0),
+                                                                         ([2.0], 0.0)]
+
+
+def test_offline_joint_names_are_the_nodes_default_joints():
+    assert joint_names(len(DEFAULT_JOINTS)) == DEFAULT_JOINTS
+    assert joint_names(2) == ['joint_1', 'joint_2']

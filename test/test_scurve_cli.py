@@ -33,7 +33,7 @@ def test_solve_scurve_prints_each_joints_seven_phases():
 
     text = ok('solve', 'scurve', '--points', '0,0', '1,-2', *LIMITS)
     assert 'scurve: 2 joints, 2 points, duration 2.9000 s' in text
-    assert 'joint 1: peak |jerk| 5.0000 rad/s³' in text
+    assert 'joint_2: peak |jerk| 5.0000 rad/s³' in text
     assert '  4           0.9000    1.1000      0.0000        0.0000     -1.0000' in text
 
 

@@ -1,9 +1,9 @@
 """
-The pieces ``traj-gen``'s offline and ROS commands share: exit codes, errors, reports.
+What ``traj-gen``'s offline and ROS commands share: exit codes, errors, joint names, reports.
 
 Used by :mod:`traj_gen_ros.cli.main` and :mod:`traj_gen_ros.cli.ros`. Its own module so that
-``cli_ros`` needs nothing from ``cli`` (``cli`` imports ``cli_ros`` only when a ROS
-command runs, so the offline commands need no ROS).
+``ros`` needs nothing from ``main`` (``main`` imports ``ros`` only when a ROS command runs,
+so the offline commands need no ROS).
 """
 
 from __future__ import annotations
@@ -17,6 +17,10 @@ EXIT_NO_ANSWER = 3
 EXIT_INTERNAL = 4
 
 
+class NoAnswerError(Exception):
+    """Nothing arrived from ROS in time: one line on stderr, exit status 3."""
+
+
 class UsageError(Exception):
     """Bad arguments or a plan the solver refuses: one line on stderr, exit status 2."""
 
@@ -24,6 +28,16 @@ class UsageError(Exception):
         """Keep ``message`` and the program (``traj-gen goal`` ...) it is about."""
         super().__init__(message)
         self.prog = prog
+
+
+def joint_names(count: int) -> list[str]:
+    """
+    Return the names ``traj-gen`` gives ``count`` joints: ``joint_1``, ``joint_2``, ….
+
+    The node's convention (its default ``joints`` parameter), so that a plan solved
+    offline and one recorded from the node name their joints alike.
+    """
+    return [f'joint_{index}' for index in range(1, count + 1)]
 
 
 def report_plot(info: dict, as_json: bool) -> None:

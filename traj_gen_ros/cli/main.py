@@ -8,13 +8,14 @@ imports rclpy only when one of them runs).
 Argument grammar: every ``--points`` value is one point; a point of several joints is
 written with commas (``--points 0,0 1,2 0.5,-1``). Per-joint values (acceleration, limits,
 boundary velocities) are one number for all joints or a comma list, one per joint.
-``--durations`` (alias ``--duration``) gives one duration per segment. Joints are numbered
-from 0 (as in the solver's messages); points keep Craig's names from 1 (t1, θ̇12, t12).
+``--durations`` (alias ``--duration``) gives one duration per segment. Joints are named
+joint_1, joint_2, … in the order of a point's values (as the node's default joints); points
+keep Craig's names from 1 (t1, θ̇12, t12).
 
-Exit codes: 0 success, 1 not accepted by the node, 2 bad arguments, a plan the solver
-refuses or a missing package (matplotlib for ``plot``), 3 no answer from ROS in time, 4 an
-internal error (a bug: please report it).
-Errors are one line on stderr.
+Exit codes: 0 success, 1 not accepted by the node (its answer, with the reason, on stdout
+as an acceptance is), 2 bad arguments, a plan the solver refuses or a missing package
+(matplotlib for ``plot``), 3 no answer from ROS in time, 4 an internal error (a bug: please
+report it). Errors of traj-gen itself are one line on stderr.
 """
 
 from __future__ import annotations
@@ -28,8 +29,10 @@ import sys
 
 from traj_gen_ros.cli.common import (  # shared with cli_ros, which must not import this module
     EXIT_INTERNAL,
+    EXIT_NO_ANSWER,
     EXIT_OK,
     EXIT_USAGE,
+    NoAnswerError,
     report_plot,
     UsageError,
 )
@@ -77,6 +80,17 @@ examples:
   traj-gen via --joints joint_1 --degrees --point 35 @2 --point 25 @3 --point 10 @6 --wait
   traj-gen via --joints joint_1 joint_2 --point 0.5 0.3 --point 1 -0.2   (timed by the node)
 """
+
+# The per-joint numbers solve and plot take after --velocities: option, metavar, help.
+_PER_JOINT_OPTIONS = (
+    ('--v0', 'V', 'start velocity (cubic, quintic, lspb, *-via), default rest'),
+    ('--vf', 'V', 'end velocity (cubic, quintic), default rest'),
+    ('--a0', 'A', 'start acceleration (quintic), default 0'),
+    ('--af', 'A', 'end acceleration (quintic), default 0'),
+    ('--max-velocity', 'V', 'min-time: velocity limit (one, or one per joint)'),
+    ('--max-acceleration', 'A', 'min-time: acceleration limit (one, or one per joint)'),
+    ('--max-jerk', 'J', 'scurve: jerk limit (one, or one per joint)'),
+)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -134,20 +148,8 @@ def add_plan_arguments(parser: argparse.ArgumentParser, optional_profile: bool) 
         '--velocities', choices=('heuristic', 'continuous'), default='heuristic',
         help='via-point velocities for cubic-via/quintic-via (and min-time via points): '
              "Craig's heuristic or continuous acceleration (default heuristic)")
-    parser.add_argument('--v0', type=number_list, metavar='V',
-                        help='start velocity (cubic, quintic, lspb, *-via), default rest')
-    parser.add_argument('--vf', type=number_list, metavar='V',
-                        help='end velocity (cubic, quintic), default rest')
-    parser.add_argument('--a0', type=number_list, metavar='A',
-                        help='start acceleration (quintic), default 0')
-    parser.add_argument('--af', type=number_list, metavar='A',
-                        help='end acceleration (quintic), default 0')
-    parser.add_argument('--max-velocity', type=number_list, metavar='V',
-                        help='min-time: velocity limit (one, or one per joint)')
-    parser.add_argument('--max-acceleration', type=number_list, metavar='A',
-                        help='min-time: acceleration limit (one, or one per joint)')
-    parser.add_argument('--max-jerk', type=number_list, metavar='J',
-                        help='scurve: jerk limit (one, or one per joint)')
+    for option, metavar, text in _PER_JOINT_OPTIONS:
+        parser.add_argument(option, type=number_list, metavar=metavar, help=text)
     parser.add_argument('--shape', choices=('lspb', 'cubic', 'quintic'), default='lspb',
                         help='min-time: the profile to time (default lspb)')
     parser.add_argument('--degrees', action='store_true',
@@ -192,8 +194,9 @@ def build_parser() -> argparse.ArgumentParser:
     goal = commands.add_parser(
         'goal', help='send a goal to a running generator node',
         description='Publish a sensor_msgs/JointState goal to NODE/goal, wait for the '
-                    'matching NODE/status and print it. Exit 0 when accepted, 1 when '
-                    'refused (the reason on stderr), 3 when there is no answer.',
+                    'matching NODE/status and print it (on stdout, accepted or not). Exit '
+                    '0 when accepted, 1 when refused or superseded, 3 when there is no '
+                    'answer.',
         epilog=GOAL_EXAMPLES)
     goal.add_argument('positions', nargs='+', metavar='JOINT=POSITION',
                       help='target of each named joint; others keep their target')
@@ -305,6 +308,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UsageError as error:
         print(f'{error.prog or command}: error: {_one_line(error)}', file=sys.stderr)
         return EXIT_USAGE
+    except NoAnswerError as error:
+        print(f'{command}: {error}', file=sys.stderr)
+        return EXIT_NO_ANSWER
     except OSError as error:
         print(f'{command}: error: {_one_line(error)}', file=sys.stderr)
         return EXIT_USAGE

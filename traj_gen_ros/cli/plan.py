@@ -13,7 +13,7 @@ import argparse
 
 import numpy as np
 from traj_gen_ros import core
-from traj_gen_ros.cli.common import UsageError
+from traj_gen_ros.cli.common import joint_names, UsageError
 
 
 class Plan:
@@ -36,6 +36,15 @@ def _per_joint(values: list[float] | None, name: str, joints: int,
         raise UsageError(f'--{name} has {len(values)} values for {joints} joints: give one, '
                          'or one per joint')
     return np.broadcast_to(np.asarray(values, dtype=float), (joints,))
+
+
+def _segment_durations(durations: list[float], points: int) -> np.ndarray:
+    """Return ``--durations`` as an array; UsageError unless there is one per segment."""
+    segments = points - 1
+    if len(durations) != segments:
+        raise UsageError(f'{points} points need {segments} duration'
+                         f'{"s" if segments > 1 else ""}, got {len(durations)}')
+    return np.array(durations, dtype=float)
 
 
 def make_plan(args: argparse.Namespace) -> Plan:
@@ -63,11 +72,7 @@ def make_plan(args: argparse.Namespace) -> Plan:
     def durations(single: bool) -> np.ndarray:
         if args.durations is None:
             raise UsageError(f'{profile} needs --duration{"" if single else "s"}')
-        segments = len(points) - 1
-        if len(args.durations) != segments:
-            raise UsageError(f'{len(points)} points need {segments} duration'
-                             f'{"s" if segments > 1 else ""}, got {len(args.durations)}')
-        return np.array(args.durations, dtype=float)
+        return _segment_durations(args.durations, len(points))
 
     try:
         if profile in ('cubic', 'quintic'):
@@ -103,6 +108,8 @@ def make_plan(args: argparse.Namespace) -> Plan:
             trajectory, times = _scurve(args, path, joint_values)
         else:
             trajectory, times = _min_time(args, path, joint_values)
+    except core.JointError as error:  # the core knows joints by index: name them as the node does
+        raise UsageError(f'{profile}: {error.named(joint_names(joints))}') from None
     except ValueError as error:
         raise UsageError(f'{profile}: {error}') from None
     if profile == 'min-time':
@@ -126,9 +133,8 @@ def _scurve(args: argparse.Namespace, path: np.ndarray,
     if args.velocities != 'heuristic':
         raise UsageError('scurve takes --velocities heuristic only (zero acceleration at '
                          'every via point)')
-    if args.durations is not None and len(args.durations) != len(path) - 1:
-        raise UsageError(f'{len(path)} points need {len(path) - 1} duration'
-                         f'{"s" if len(path) > 2 else ""}, got {len(args.durations)}')
+    if args.durations is not None:
+        _segment_durations(args.durations, len(path))
     start = {'v0': joint_values('v0'), 'a0': joint_values('a0')}
     if len(path) == 2 and args.durations is None:
         trajectory = core.min_time(path[0], path[1], limits[0], limits[1], 'scurve',

@@ -2,13 +2,14 @@
 ``traj-gen solve`` output: coefficients, Craig's LSPB table or the S-curve phase table.
 
 :func:`describe` gives a JSON-ready dictionary of a plan; :func:`format_text` the text a
-person reads. Joints are counted from 0 (as in the solver's messages); points keep
-Craig's names from 1 (t1, θ̇12, t12).
+person reads. Joints are named ``joint_1``, ``joint_2``, … (:func:`joint_names`, the
+node's convention); points keep Craig's names from 1 (t1, θ̇12, t12).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from traj_gen_ros.cli.common import joint_names
 from traj_gen_ros.cli.plan import Plan
 
 
@@ -91,12 +92,13 @@ def format_text(result: dict) -> str:
     """Format :func:`describe`'s dict the way the book writes it."""
     unit = result['units']['position']
     joints = result['joints']
+    names = joint_names(joints)
     lines = [f"{result['profile']}: {joints} joint{'s' if joints > 1 else ''}, "
              f"{len(result['points'])} points, duration {result['duration']:.4f} s; "
              f'positions in {unit}, times in s']
     if result['kind'] == 'scurve':
         for joint, rows in enumerate(result['phases']):
-            lines.append(f"joint {joint}: peak |jerk| {result['peak_jerk'][joint]:.4f} "
+            lines.append(f"{names[joint]}: peak |jerk| {result['peak_jerk'][joint]:.4f} "
                          f'{unit}/s³; acceleration and velocity at the end of each phase')
             lines.append(f"  {'phase':<8}{'start':>10}{'duration':>10}{'jerk':>12}"
                          f"{'acceleration':>14}{'velocity':>12}")
@@ -108,7 +110,7 @@ def format_text(result: dict) -> str:
     if result['kind'] == 'lspb':
         points = len(result['points'])
         for joint in range(joints):
-            lines.append(f"joint {joint}: |θ̈| = {result['blend_acceleration'][joint]:.4f} "
+            lines.append(f"{names[joint]}: |θ̈| = {result['blend_acceleration'][joint]:.4f} "
                          f'{unit}/s²')
             for index in range(points):
                 row = f"  t{index + 1:<3} = {result['blend_times'][joint][index]:9.4f} s"
@@ -124,13 +126,14 @@ def format_text(result: dict) -> str:
     powers = ''.join(f'{"a" + str(power):>12}' for power in range(degree + 1))
     terms = ' + '.join(['a0', 'a1 t'] + [f'a{p} t{"²³⁴⁵"[p - 2]}' for p in range(2, degree + 1)])
     lines.append(f'θ(t) = {terms}, t from the segment start')
+    width = max(len(name) for name in names) + 1
     for segment, coefficients in enumerate(result['coefficients']):
         start = result['segment_starts'][segment]
         duration = result['segment_durations'][segment]
         lines.append(f'segment {segment + 1}: t = {start:.4f} … {start + duration:.4f} s')
-        lines.append(f'  joint{powers}')
-        for joint, row in enumerate(coefficients):
-            lines.append(f'  {joint:<5}' + ''.join(f'{value:12.4f}' for value in row))
+        lines.append(f"  {'joint':<{width}}{powers}")
+        for name, row in zip(names, coefficients, strict=True):
+            lines.append(f'  {name:<{width}}' + ''.join(f'{value:12.4f}' for value in row))
     return '\n'.join(lines)
 
 

@@ -21,8 +21,8 @@ import math
 import os
 import re
 import secrets
-import sys
 import time
+from typing import TYPE_CHECKING
 
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticStatus
@@ -32,21 +32,20 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from traj_gen_ros.cli.common import (
-    EXIT_NO_ANSWER,
     EXIT_OK,
     EXIT_REFUSED,
+    NoAnswerError,
     report_plot,
     UsageError,
 )
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+if TYPE_CHECKING:  # matplotlib is imported only when a plot is made
+    from matplotlib.figure import Figure
+
 _AT_GOAL = 1e-6  # rad: the motion has ended when the named joints are this close, at rest
 _LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
 _SPIN_PERIOD = 0.05
-
-
-class NoAnswerError(Exception):
-    """Nothing arrived in time: exit status 3."""
 
 
 def node_name(text: str) -> str:
@@ -63,6 +62,12 @@ def joint_states_topic(node: str) -> str:
     return f'{namespace}/joint_states'
 
 
+def _check_timeout(timeout: float) -> None:
+    """Refuse a ``--timeout`` that is not > 0 s (UsageError)."""
+    if not timeout > 0:
+        raise UsageError('--timeout must be > 0 s')
+
+
 def _number(text: str, what: str) -> float:
     try:
         value = float(text)
@@ -73,8 +78,13 @@ def _number(text: str, what: str) -> float:
     return value
 
 
-def parse_goal(items: list[str], degrees: bool) -> tuple[list[str], list[float]]:
-    """Parse ``JOINT=POSITION`` items into names and positions (rad)."""
+def goal_from_args(items: list[str], degrees: bool) -> tuple[list[str], list[float]]:
+    """
+    Read ``traj-gen goal``'s ``JOINT=POSITION`` words into names and positions (rad).
+
+    The command line's side only; the node reads the message it gets with
+    :func:`traj_gen_ros.node.parsing.parse_goal`.
+    """
     names, positions = [], []
     scale = math.radians(1.0) if degrees else 1.0
     for item in items:
@@ -86,10 +96,10 @@ def parse_goal(items: list[str], degrees: bool) -> tuple[list[str], list[float]]
     return names, positions
 
 
-def parse_via(joints: list[str], points: list[list[str]],
-              degrees: bool) -> list[tuple[list[float], float]]:
+def via_from_args(joints: list[str], points: list[list[str]],
+                  degrees: bool) -> list[tuple[list[float], float]]:
     """
-    Parse ``--point Q… [@T]`` groups into ``[(positions (rad), time (s)), …]``.
+    Read ``traj-gen via``'s ``--point Q… [@T]`` groups: ``[(positions (rad), time (s)), …]``.
 
     Either every point has ``@T`` or none has; with none every time is 0, which the node
     reads as "time the path from the limits".
@@ -165,11 +175,11 @@ def _request_message(args: argparse.Namespace) -> tuple[object, str, list[str], 
     """Build the request; return it, its kind, the named joints and their final targets."""
     token = f'traj-gen/{os.getpid()}/{secrets.token_hex(4)}'
     if args.command == 'goal':
-        names, positions = parse_goal(args.positions, args.degrees)
+        names, positions = goal_from_args(args.positions, args.degrees)
         message = JointState(name=names, position=positions)
         message.header.frame_id = token
         return message, 'goal', names, positions
-    points = parse_via(args.joints, args.points, args.degrees)
+    points = via_from_args(args.joints, args.points, args.degrees)
     message = JointTrajectory(joint_names=list(args.joints))
     message.header.frame_id = token
     for positions, when in points:
@@ -182,52 +192,47 @@ def _request_message(args: argparse.Namespace) -> tuple[object, str, list[str], 
 
 def run_request(args: argparse.Namespace) -> int:
     """``traj-gen goal`` / ``traj-gen via``: publish, wait for the status, print it."""
-    command = f'traj-gen {args.command}'
     node = node_name(args.node)
-    if args.timeout <= 0:
-        raise UsageError('--timeout must be > 0 s')
+    _check_timeout(args.timeout)
     message, kind, names, targets = _request_message(args)
-    try:
-        with _session() as session:
-            ros = session.node
-            statuses: list = []
-            states: list = []
-            publisher = ros.create_publisher(type(message), f'{node}/{kind}', 10)
-            status_sub = ros.create_subscription(
-                DiagnosticStatus, f'{node}/status', statuses.append, _reliable(100))
-            if args.wait:
-                ros.create_subscription(JointState, args.joint_states or joint_states_topic(node),
-                                        states.append, _reliable(10))
-            session.wait(lambda: publisher.get_subscription_count() > 0
-                         and status_sub.get_publisher_count() > 0, args.timeout,
-                         f'{node} is not subscribed to {node}/{kind} (is the node running, '
-                         'with the same ROS_DOMAIN_ID?)')
-            seen = len(statuses)
-            publisher.publish(message)
+    with _session() as session:
+        ros = session.node
+        statuses: list = []
+        states: list = []
+        publisher = ros.create_publisher(type(message), f'{node}/{kind}', 10)
+        status_sub = ros.create_subscription(
+            DiagnosticStatus, f'{node}/status', statuses.append, _reliable(100))
+        if args.wait:
+            ros.create_subscription(JointState, args.joint_states or joint_states_topic(node),
+                                    states.append, _reliable(10))
+        session.wait(lambda: publisher.get_subscription_count() > 0
+                     and status_sub.get_publisher_count() > 0, args.timeout,
+                     f'{node} is not subscribed to {node}/{kind} (is the node running, '
+                     'with the same ROS_DOMAIN_ID?)')
+        seen = len(statuses)
+        publisher.publish(message)
 
-            def ours(status: object) -> bool:
-                values = {pair.key: pair.value for pair in status.values}
-                return (status.name == node and values.get('request') == kind
-                        and values.get('frame_id', message.header.frame_id)
-                        == message.header.frame_id)
+        def ours(status: object) -> bool:
+            values = {pair.key: pair.value for pair in status.values}
+            return (status.name == node and values.get('request') == kind
+                    and values.get('frame_id', message.header.frame_id)
+                    == message.header.frame_id)
 
-            def answer() -> object:
-                return next((s for s in statuses[seen:] if ours(s)), None)
+        def answer() -> object:
+            return next((s for s in statuses[seen:] if ours(s)), None)
 
-            status = _status_dict(session.wait(answer, args.timeout,
-                                               f'no {node}/status for the {kind} request'))
-            if args.json:
-                print(json.dumps(status, indent=2))
-            else:
-                print(f"{status['level']}: {status['message']}")
-            if status['level'] != 'OK':
-                print(f"{command}: {status['message']}", file=sys.stderr)
-                return EXIT_REFUSED
-            if args.wait:
-                _wait_for_end(session, states, status, names, targets, args.timeout)
-    except NoAnswerError as error:
-        print(f'{command}: {error}', file=sys.stderr)
-        return EXIT_NO_ANSWER
+        status = _status_dict(session.wait(answer, args.timeout,
+                                           f'no {node}/status for the {kind} request'))
+        # The node's answer, accepted or not, is the command's output (once, on
+        # stdout); the exit status says which. stderr is for traj-gen's own errors.
+        if args.json:
+            print(json.dumps(status, indent=2))
+        else:
+            print(f"{status['level']}: {status['message']}")
+        if status['level'] != 'OK':
+            return EXIT_REFUSED
+        if args.wait:
+            _wait_for_end(session, states, status, names, targets, args.timeout)
     return EXIT_OK
 
 
@@ -256,32 +261,38 @@ def run_plot_topic(args: argparse.Namespace) -> int:
     """``traj-gen plot --topic``: plot one JointTrajectory (transient local) from a topic."""
     from traj_gen_ros.cli import plot as plotting  # matplotlib: loaded only when a plot is made
 
-    if args.timeout <= 0:
-        raise UsageError('--timeout must be > 0 s')
+    _check_timeout(args.timeout)
     topic = args.topic if args.topic.startswith('/') else '/' + args.topic
     received: list = []
-    try:
-        with _session() as session:
-            session.node.create_subscription(JointTrajectory, topic, received.append,
-                                             _reliable(1, transient_local=True))
-            session.wait(lambda: received, args.timeout,
-                         f'no trajectory_msgs/JointTrajectory on {topic}')
-    except NoAnswerError as error:
-        print(f'traj-gen plot: {error}', file=sys.stderr)
-        return EXIT_NO_ANSWER
+    with _session() as session:
+        session.node.create_subscription(JointTrajectory, topic, received.append,
+                                         _reliable(1, transient_local=True))
+        session.wait(lambda: received, args.timeout,
+                     f'no trajectory_msgs/JointTrajectory on {topic}')
     message = received[0]
     if not message.points:
         raise UsageError(f'the trajectory on {topic} has no points')
-    times, positions, velocities, accelerations = trajectory_arrays(message)
-    scale = 180.0 / math.pi if args.degrees else 1.0
-    info = plotting.plot_samples(
-        times, positions * scale, velocities * scale, accelerations * scale, args.output,
-        unit='deg' if args.degrees else 'rad',
-        marks=(times[[0, -1]], positions[[0, -1]] * scale), size=args.size,
-        title=f'{topic}: {len(times)} points, {times[-1]:.3g} s',
-        joint_names=list(message.joint_names))
-    report_plot(info, args.json)
+    figure = topic_figure(message, topic, args.degrees, args.size)
+    report_plot(plotting.write_png(figure, args.output, len(message.joint_names)), args.json)
     return EXIT_OK
+
+
+def topic_figure(message: object, topic: str, degrees: bool, size: tuple[int, int]) -> Figure:
+    """
+    Return the figure ``plot --topic`` writes of a JointTrajectory received on ``topic``.
+
+    Its start and end are marked; the message holds samples only, not the points of the
+    request it was planned from.
+    """
+    from traj_gen_ros.cli import plot as plotting  # matplotlib: loaded only when a plot is made
+
+    times, positions, velocities, accelerations = trajectory_arrays(message)
+    scale = 180.0 / math.pi if degrees else 1.0
+    return plotting.draw_samples(
+        times, positions * scale, velocities * scale, accelerations * scale,
+        unit='deg' if degrees else 'rad', marks=(times[[0, -1]], positions[[0, -1]] * scale),
+        size=size, title=f'{topic}: {len(times)} points, {times[-1]:.3g} s',
+        joint_names=list(message.joint_names))
 
 
 def trajectory_arrays(message: object
