@@ -67,7 +67,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
 CONFIG_PARAMETERS = ('joints', 'rate_hz', 'profile', 'via_velocities', 'max_velocity',
-                     'max_acceleration', 'lspb_acceleration', 'max_jerk')
+                     'max_acceleration', 'lspb_acceleration', 'max_jerk', 'angle_wraparound')
 #: The executor thread gets the GIL back to the stream thread this often (s).
 SWITCH_INTERVAL = 0.0001
 #: The spin loop checks this often (s) whether SIGINT/SIGTERM asked it to end.

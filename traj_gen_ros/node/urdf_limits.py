@@ -96,6 +96,7 @@ class JointLimits:
     :ivar velocity: velocity limits, rad/s or m/s, ``(joints,)``; inf: none.
     :ivar velocity_source: per joint :data:`URDF`, :data:`PARAMETER` or :data:`NONE`.
     :ivar units: per joint ``'rad'``, or ``'m'`` for a prismatic joint.
+    :ivar types: per joint its URDF type, or :data:`ABSENT`.
     """
 
     joints: tuple[str, ...]
@@ -103,6 +104,7 @@ class JointLimits:
     velocity: np.ndarray
     velocity_source: tuple[str, ...]
     units: tuple[str, ...]
+    types: tuple[str, ...] = ()
 
 
 def urdf_limits(urdf_xml: str | bytes, joints: Sequence[str]) -> UrdfLimits:
@@ -214,7 +216,7 @@ def merge_limits(urdf: UrdfLimits, *, min_position: float | Sequence[float] = -m
             f'[{parameter_lower[index]:g}, {parameter_upper[index]:g}] {unit}')
     return JointLimits(urdf.joints, PositionLimits(_frozen(lower), _frozen(upper),
                                                    lower_source, upper_source),
-                       _frozen(velocity), velocity_source, units)
+                       _frozen(velocity), velocity_source, units, urdf.types)
 
 
 def _sources(from_urdf: np.ndarray, from_parameter: np.ndarray, unlimited: float,
