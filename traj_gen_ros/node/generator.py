@@ -115,8 +115,10 @@ class TrajectoryGenerator(Node):
         self.create_service(Trigger, '~/stop', self._on_stop)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
-        self._diagnostics = NodeDiagnostics(self, lambda: self._config, self._limits,
-                                            self._answers, self._rate_meter)
+        self._diagnostics = NodeDiagnostics(
+            self, lambda: self._config, self._limits, self._answers, self._rate_meter,
+            lambda: self._stream.start_state(self._stream.last_published())[0].position)
+        self._diagnostics.check_ranges()  # a start outside the limits is said at once
         self._answers.trajectory(0, held(initial), self._config.rate_hz)  # warm up
         priority = self._stream.start()
         self._request_thread.start()
