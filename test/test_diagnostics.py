@@ -39,6 +39,15 @@ def test_a_slow_stream_or_a_refused_description_warns():
     assert level == OK and dict(values)['stream rate (Hz)'] == 'not measured yet'
 
 
+def test_a_joint_outside_its_range_warns_naming_it():
+    outside = "joint 'joint_4' is at 0 rad, outside its range [0.194395, 2.2944] rad (…)"
+    level, message, values = status(outside=outside)
+    assert level == WARN
+    assert message == f'{outside}: it may hold there or move toward its range'
+    assert dict(values)['outside range'] == outside
+    assert 'outside range' not in dict(status()[2])
+
+
 def test_rate_meter_counts_publications_per_window():
     published = []
     meter = RateMeter(10.0)

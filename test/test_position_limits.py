@@ -13,7 +13,12 @@ from traj_gen_ros.node.config import make_config
 from traj_gen_ros.node.motion import State
 from traj_gen_ros.node.parsing import GoalRequest, RequestError, ViaRequest
 from traj_gen_ros.node.planning import plan_request, plan_stop
-from traj_gen_ros.node.position_checks import check_plan, check_request, position_extrema
+from traj_gen_ros.node.position_checks import (
+    check_plan,
+    check_request,
+    outside_ranges,
+    position_extrema,
+)
 from traj_gen_ros.node.urdf_limits import merge_limits, UrdfLimits
 
 NAMES = ('shoulder', 'elbow', 'wrist')
@@ -122,3 +127,41 @@ def test_commanded_positions_outside_the_range_are_refused_by_name():
     # A joint already outside may be told to stay where it is.
     check_request(limits(), GoalRequest(np.array([0]), np.array([3.0])), [3.0, 0.0, 0.0])
     check_request(limits(-math.inf, math.inf), goal, np.zeros(3))
+
+
+def test_a_joint_outside_its_range_may_move_toward_it_but_not_further_out():
+    # 'shoulder' starts at 1.5, above its range [-1, 1]: any goal in [-1, 1.5] is accepted.
+    start = np.array([1.5, 0.0, 0.0])
+    for target in (1.5, 1.2, 1.0, 0.0, -1.0):
+        check_request(limits(), GoalRequest(np.array([0]), np.array([target])), start)
+    for target, allowed in ((1.6, r'\[-1, 1\.5\]'), (-1.1, r'\[-1, 1\.5\]')):
+        with pytest.raises(RequestError, match=(
+                rf"^goal position {target:g} rad for joint 'shoulder' is outside its range "
+                r'\[-1, 1\] rad \(lower from parameter min_position; upper from '
+                r'parameter max_position\); it is at 1\.5 rad, '
+                rf'outside its range: only positions in {allowed} rad \(toward or into its '
+                r'range\) are allowed$')):
+            check_request(limits(), GoalRequest(np.array([0]), np.array([target])), start)
+    # The others move while it holds; a via path may come in step by step, not go out.
+    check_request(limits(), GoalRequest(np.array([2]), np.array([0.5])), start)
+    path = ViaRequest(np.array([0]), np.array([1.0, 2.0]), np.array([[1.3], [0.2]]), None,
+                      None, False)
+    check_request(limits(), path, start)
+    out = ViaRequest(np.array([0]), np.array([1.0, 2.0]), np.array([[1.3], [1.7]]), None,
+                     None, False)
+    with pytest.raises(RequestError, match="via point 1 position 1.7 rad for joint 'shoulder'"):
+        check_request(limits(), out, start)
+    # A joint inside its range gets the range alone, no widening.
+    with pytest.raises(RequestError, match=r"joint 'wrist' is outside its range \[-1, 1\] "
+                                           r'rad \(lower from parameter min_position; upper '
+                                           r'from parameter max_position\)$'):
+        check_request(limits(), GoalRequest(np.array([2]), np.array([1.1])), start)
+
+
+def test_outside_ranges_names_each_joint_its_position_and_range():
+    assert outside_ranges(limits(), [0.0, 1.0, -1.0]) == ''
+    assert outside_ranges(None, [9.0, 9.0, 9.0]) == ''
+    sources = '(lower from parameter min_position; upper from parameter max_position)'
+    assert outside_ranges(limits(), [1.5, 0.0, -2.0]) == (
+        f"joint 'shoulder' is at 1.5 rad, outside its range [-1, 1] rad {sources}; "
+        f"joint 'wrist' is at -2 rad, outside its range [-1, 1] rad {sources}")

@@ -49,6 +49,9 @@ class Config:
     max_jerk: np.ndarray
     #: Position (and velocity) limits in force, with their sources; None: no position limits.
     limits: JointLimits | None = None
+    #: Targets of URDF continuous joints without position limits are reached the shortest
+    #: way round (:mod:`traj_gen_ros.node.continuous_joints`).
+    angle_wraparound: bool = True
 
     @property
     def profile_acceleration(self) -> np.ndarray:
@@ -130,12 +133,14 @@ def initial_state(joints: Sequence[str], initial_positions: Sequence[float]) -> 
 
 def make_config(joints: Sequence[str], rate_hz: float, profile: str, via_velocities: str,
                 max_velocity: object, max_acceleration: object,
-                lspb_acceleration: object, max_jerk: object = DEFAULT_MAX_JERK) -> Config:
+                lspb_acceleration: object, max_jerk: object = DEFAULT_MAX_JERK,
+                angle_wraparound: object = True) -> Config:
     """
     Validate the node parameters together; raise ``ValueError`` with the reason.
 
     Limits in rad/s (``max_velocity``), rad/s² (``max_acceleration``,
-    ``lspb_acceleration``) and rad/s³ (``max_jerk``), one value or one per joint.
+    ``lspb_acceleration``) and rad/s³ (``max_jerk``), one value or one per joint;
+    ``angle_wraparound`` a bool.
     """
     names = check_joint_names(joints)
     if isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float)) \
@@ -159,4 +164,7 @@ def make_config(joints: Sequence[str], rate_hz: float, profile: str, via_velocit
                          f'above max_acceleration {a_max[index]:g}: use a value <= '
                          f'max_acceleration, or 0 to use max_acceleration')
     a_lspb = np.where(a_lspb == 0.0, a_max, a_lspb)
-    return Config(names, float(rate_hz), profile, via_velocities, v_max, a_max, a_lspb, j_max)
+    if not isinstance(angle_wraparound, bool):
+        raise ValueError(f'angle_wraparound must be true or false, got {angle_wraparound!r}')
+    return Config(names, float(rate_hz), profile, via_velocities, v_max, a_max, a_lspb, j_max,
+                  angle_wraparound=angle_wraparound)

@@ -12,8 +12,8 @@ message and key/values:
 * :class:`MotionLog` knows the accepted motions and their start times, so it can say
   which one is in progress and how long it has left (or ``holding``);
 * :func:`node_status` puts them together: WARN when the achieved rate is below
-  ``RATE_WARN_FRACTION`` of ``rate_hz`` or when the last robot description was refused,
-  OK otherwise.
+  ``RATE_WARN_FRACTION`` of ``rate_hz``, when the last robot description was refused, or
+  when the setpoint has a joint outside its position range, OK otherwise.
 
 Units: Hz, s, ns where named.
 """
@@ -107,7 +107,8 @@ class MotionLog:
 
 def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str,
                 motion: str, limits: str, urdf_source: str, urdf_problem: str,
-                counts: RequestCounts) -> tuple[int, str, list[tuple[str, str]]]:
+                counts: RequestCounts, outside: str = ''
+                ) -> tuple[int, str, list[tuple[str, str]]]:
     """
     Build the node's diagnostic status: ``(level, message, [(key, value), …])``.
 
@@ -117,6 +118,7 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
     :param limits: the limits in force and their sources (``describe_sources``).
     :param urdf_source: where the URDF in force came from, or ``none``.
     :param urdf_problem: why the last robot description was refused ('' if none was).
+    :param outside: the setpoint's joints outside their range (``outside_ranges``), or ''.
     """
     problems = []
     if rate is not None and rate < RATE_WARN_FRACTION * rate_hz:
@@ -124,6 +126,8 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
                         f'{RATE_WARN_FRACTION:.0%} of rate_hz {rate_hz:g}')
     if urdf_problem:
         problems.append(urdf_problem)
+    if outside:
+        problems.append(f'{outside}: it may hold there or move toward its range')
     measured = 'not measured yet' if rate is None else f'{rate:.1f}'
     if problems:
         level, message = WARN, '; '.join(problems)
@@ -144,4 +148,6 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
     ]
     if urdf_problem:
         values.append(('robot_description refused', urdf_problem))
+    if outside:
+        values.append(('outside range', outside))
     return level, message, values

@@ -5,8 +5,10 @@ One ``diagnostic_msgs/DiagnosticArray`` per second on the absolute topic ``/diag
 (as ``diagnostic_updater`` publishes), holding one ``DiagnosticStatus`` named
 ``<node name>: Trajectory generator`` with an empty ``hardware_id``. Its content is built
 by :func:`traj_gen_ros.node.diagnostics.node_status`: achieved stream rate, ``rate_hz``, the
-motion in progress, the limits in force and where they came from, and the counts of
-accepted, refused and superseded requests.
+motion in progress, the limits in force and where they came from, the counts of
+accepted, refused and superseded requests, and the joints of the setpoint outside their
+position range (:func:`~traj_gen_ros.node.position_checks.outside_ranges`: WARN, and a
+warning in the log when that changes, at start-up at once).
 
 The timer runs on the executor thread and only reads counters and formats a few strings
 (the limits' text is formatted once per change of the limits), so it cannot disturb the
@@ -16,7 +18,7 @@ that also counts each answer and notes each accepted motion.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.node import Node
@@ -26,6 +28,7 @@ from traj_gen_ros.node.answers import Answers, Request
 from traj_gen_ros.node.config import Config
 from traj_gen_ros.node.diagnostics import MotionLog, node_status, RateMeter, RequestCounts
 from traj_gen_ros.node.motion import PlannedMotion
+from traj_gen_ros.node.position_checks import outside_ranges
 from traj_gen_ros.node.robot_description import NodeLimits
 from traj_gen_ros.node.urdf_limits import describe_sources
 
@@ -59,9 +62,16 @@ class NodeDiagnostics:
     """The ``/diagnostics`` publisher and its timer."""
 
     def __init__(self, node: Node, config: Callable[[], Config], limits: NodeLimits,
-                 answers: CountingAnswers, meter: RateMeter) -> None:
-        """Publish the node's status every :data:`PERIOD` s from the node's parts."""
+                 answers: CountingAnswers, meter: RateMeter,
+                 setpoint: Callable[[], Sequence[float]]) -> None:
+        """
+        Publish the node's status every :data:`PERIOD` s from the node's parts.
+
+        :param setpoint: returns the position last published (rad or m).
+        """
         self._node = node
+        self._setpoint = setpoint
+        self._outside = ''
         self._config = config
         self._limits = limits
         self._answers = answers
@@ -79,6 +89,23 @@ class NodeDiagnostics:
             self._limits_text = (config.limits, describe_sources(config.limits))
         return self._limits_text[1]
 
+    def check_ranges(self) -> str:
+        """
+        Return which joints of the setpoint are outside their range ('' if none).
+
+        Logs a warning when that changes to a joint outside (an INFO when all are back in).
+        """
+        outside = outside_ranges(self._config().limits, self._setpoint())
+        if outside != self._outside:
+            logger = self._node.get_logger()
+            if outside:
+                logger.warning(f'{outside}: it may hold there or move toward its range; a '
+                               'goal that takes it further out is refused')
+            else:
+                logger.info('every joint is within its position range')
+            self._outside = outside
+        return outside
+
     def publish(self) -> None:
         """Publish one ``DiagnosticArray`` with the node's status (a failure is logged)."""
         try:
@@ -95,7 +122,8 @@ class NodeDiagnostics:
             joints=len(config.joints), profile=config.profile,
             motion=self._answers.motions.describe(now.nanoseconds),
             limits=self._limits_summary(config), urdf_source=self._limits.source,
-            urdf_problem=self._limits.problem, counts=self._answers.counts)
+            urdf_problem=self._limits.problem, counts=self._answers.counts,
+            outside=self.check_ranges())
         status = DiagnosticStatus(level=bytes([level]), name=self._name, message=message,
                                   hardware_id='',
                                   values=[KeyValue(key=k, value=v) for k, v in values])

@@ -67,7 +67,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
 CONFIG_PARAMETERS = ('joints', 'rate_hz', 'profile', 'via_velocities', 'max_velocity',
-                     'max_acceleration', 'lspb_acceleration', 'max_jerk')
+                     'max_acceleration', 'lspb_acceleration', 'max_jerk', 'angle_wraparound')
 #: The executor thread gets the GIL back to the stream thread this often (s).
 SWITCH_INTERVAL = 0.0001
 #: The spin loop checks this often (s) whether SIGINT/SIGTERM asked it to end.
@@ -115,8 +115,10 @@ class TrajectoryGenerator(Node):
         self.create_service(Trigger, '~/stop', self._on_stop)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
-        self._diagnostics = NodeDiagnostics(self, lambda: self._config, self._limits,
-                                            self._answers, self._rate_meter)
+        self._diagnostics = NodeDiagnostics(
+            self, lambda: self._config, self._limits, self._answers, self._rate_meter,
+            lambda: self._stream.start_state(self._stream.last_published())[0].position)
+        self._diagnostics.check_ranges()  # a start outside the limits is said at once
         self._answers.trajectory(0, held(initial), self._config.rate_hz)  # warm up
         priority = self._stream.start()
         self._request_thread.start()

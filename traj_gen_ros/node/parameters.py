@@ -102,6 +102,10 @@ def descriptors(joint_count: int) -> dict[str, tuple[object, ParameterDescriptor
         'max_position': ([math.inf], _per_joint(
             'Upper position limit; the URDF upper limit applies too, the tighter wins',
             '.inf means none, -inf not allowed', 'rad or m')),
+        'angle_wraparound': (True, ParameterDescriptor(
+            description='Goals and via points of URDF continuous joints without position '
+                        'limits are reached the shortest way round (whole turns added).',
+            type=ParameterType.PARAMETER_BOOL)),
         'robot_description': ('', ParameterDescriptor(
             description='URDF of the robot (XML); its joint limits apply. A message on the '
                         'robot_description topic replaces it; empty: none.',

@@ -25,6 +25,7 @@ Units: rad, rad/s, rad/s², rad/s³, s; arrays are ``(samples, joints)``.
 from __future__ import annotations
 
 from collections.abc import Sequence
+import dataclasses
 import math
 
 import numpy as np
@@ -35,6 +36,7 @@ from traj_gen_ros.core.stops import brake
 from traj_gen_ros.core.timing import min_time, shortest_duration
 from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.config import Config
+from traj_gen_ros.node.continuous_joints import unwrap_targets, wrapping_joints
 from traj_gen_ros.node.motion import held, PlannedMotion, State
 from traj_gen_ros.node.parsing import GoalRequest, MAX_DURATION, RequestError, ViaRequest
 from traj_gen_ros.node.position_checks import check_plan, check_request
@@ -55,8 +57,12 @@ def plan_request(config: Config, state: State, hold_at: np.ndarray,
     ``hold_at`` is where the motion being replaced would have come to rest (rad).
     Raises :class:`RequestError` with the reason when the request cannot be executed,
     also when a commanded position or the plan leaves the position limits in force
-    (``config.limits``, :mod:`traj_gen_ros.node.position_checks`).
+    (``config.limits``, :mod:`traj_gen_ros.node.position_checks`). With
+    ``config.angle_wraparound``, continuous joints' targets are first moved by whole turns
+    to the nearest (:func:`unwrap_request`).
     """
+    if config.angle_wraparound:
+        request = unwrap_request(config, state.position, request)
     if config.limits is not None:
         check_request(config.limits, request, state.position)
     try:
@@ -70,6 +76,23 @@ def plan_request(config: Config, state: State, hold_at: np.ndarray,
     if config.limits is not None:
         check_plan(config.limits, motion.plan, state.position)
     return motion
+
+
+def unwrap_request(config: Config, start: np.ndarray, request: GoalRequest | ViaRequest
+                   ) -> GoalRequest | ViaRequest:
+    """
+    Return ``request`` with each wrapping joint's targets the shortest way round (rad).
+
+    A goal is taken from ``start``; via points each from the previous one, the first from
+    ``start`` (:func:`traj_gen_ros.node.continuous_joints.unwrap_targets`). Joints that do
+    not wrap (:func:`~traj_gen_ros.node.continuous_joints.wrapping_joints`) are unchanged.
+    """
+    mask = wrapping_joints(config.limits)
+    if not mask.any():
+        return request
+    named = request.joints
+    positions = unwrap_targets(start[named], request.positions, mask[named])
+    return dataclasses.replace(request, positions=positions)
 
 
 def plan_goal(config: Config, state: State, hold_at: np.ndarray,

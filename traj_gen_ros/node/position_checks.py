@@ -15,9 +15,13 @@ name, the value and the range:
   piece's ends or at real roots of its velocity, found as the eigenvalues of the velocity's
   companion matrix (all pieces and joints at once).
 
-A start already outside the range (limits tightened while the setpoint was outside) may
-stay where it is: the plan may not go beyond the start, so that moving back in is allowed.
-``~/stop`` is never checked.
+A joint may be outside its range already: ``initial_positions`` (or a measured state)
+there, or limits narrowed while it was there. :func:`outside_ranges` says so (the node
+logs it and reports WARN on ``/diagnostics``). Such a joint may hold where it is while
+the others move, and move toward or into its range: for both checks the positions of a
+joint that starts at ``s`` must stay within ``[min(s, lower), max(s, upper)]`` (its
+range, widened to the start), so only a goal, via point or plan that takes it further
+out is refused. ``~/stop`` is never checked.
 
 Units: rad or m, s.
 """
@@ -31,8 +35,6 @@ from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.parsing import GoalRequest, RequestError, ViaRequest
 from traj_gen_ros.node.urdf_limits import JointLimits, NONE, PARAMETER
 
-#: A commanded position this close to the start (rad or m) may stay outside the range.
-START_TOLERANCE = 1e-6
 #: Slack on a position bound (relative to ``max(1, |bound|)``): rounding, not an excess.
 POSITION_TOLERANCE = 1e-9
 
@@ -134,38 +136,73 @@ def _range(limits: JointLimits, index: int) -> str:
             f'({"; ".join(_bound_text(limits, index, b) for b in ("lower", "upper"))})')
 
 
+def _envelope(limits: JointLimits, joints: np.ndarray, start: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Return the bounds a plan of ``joints`` must keep: the range widened to the start."""
+    lower, upper = limits.position.lower[joints], limits.position.upper[joints]
+    return np.minimum(lower, start[joints]), np.maximum(upper, start[joints])
+
+
+def outside_ranges(limits: JointLimits | None, positions: Sequence[float]) -> str:
+    """
+    Say which joints are outside their position range at ``positions`` (rad or m).
+
+    :return: '' when all are within (bounds included, with ``POSITION_TOLERANCE``);
+        otherwise one clause per joint, joined by ``'; '``, e.g. ``joint 'joint_4' is at 0
+        rad, outside its range [0.194395, 2.29440] rad (lower from URDF; upper from
+        URDF)``.
+    """
+    if limits is None:
+        return ''
+    parts = []
+    for index, value in enumerate(np.asarray(positions, dtype=float)):
+        if _outside(limits, index, float(value)) is not None:
+            parts.append(f'joint {limits.joints[index]!r} is at {value:.6g} '
+                         f'{limits.units[index]}, outside its range {_range(limits, index)}')
+    return '; '.join(parts)
+
+
 def check_request(limits: JointLimits, request: GoalRequest | ViaRequest,
                   start: Sequence[float]) -> None:
     """
     Refuse a goal or via point outside its joint's position range.
 
-    A position within ``START_TOLERANCE`` of the joint's ``start`` (rad or m) is allowed
-    even outside the range: the joint may stay where it is.
+    A joint whose ``start`` (rad or m) is outside its range may be sent anywhere between
+    its start and its range, not further out (:func:`_envelope`).
 
     :raises RequestError: e.g. ``goal position 3.2 rad for joint 'joint_2' is outside its
-        range [-2.9, 2.9] rad (lower from URDF; upper from URDF)``.
+        range [-2.9, 2.9] rad (lower from URDF; upper from URDF)``; for a joint outside
+        already, ``…; it is at 0 rad, outside its range: only positions in [0, 2.29] rad
+        (toward or into its range) are allowed``.
     """
     joints = np.asarray(request.joints, dtype=int)
+    start = np.asarray(start, dtype=float)
     rows = np.atleast_2d(np.asarray(request.positions, dtype=float))  # (points, named)
-    lower, upper = limits.position.lower[joints], limits.position.upper[joints]
+    lower, upper = _envelope(limits, joints, start)
     slack = POSITION_TOLERANCE
     outside = (rows < lower - slack * np.maximum(1.0, np.abs(lower))) | \
         (rows > upper + slack * np.maximum(1.0, np.abs(upper)))
-    outside &= np.abs(rows - np.asarray(start, dtype=float)[joints]) > START_TOLERANCE
     if not outside.any():
         return
     point, column = np.argwhere(outside)[0]  # the first point, then the first joint named
     index, value = int(joints[column]), float(rows[point, column])
     label = 'goal position' if isinstance(request, GoalRequest) else \
         f'via point {point} position'
-    raise RequestError(f'{label} {value:.6g} {limits.units[index]} for joint '
-                       f'{limits.joints[index]!r} is outside its range {_range(limits, index)}')
+    unit = limits.units[index]
+    message = (f'{label} {value:.6g} {unit} for joint {limits.joints[index]!r} is outside '
+               f'its range {_range(limits, index)}')
+    if _outside(limits, index, float(start[index])) is not None:
+        message += (f'; it is at {start[index]:.6g} {unit}, outside its range: only '
+                    f'positions in [{lower[column]:.6g}, {upper[column]:.6g}] {unit} (toward '
+                    'or into its range) are allowed')
+    raise RequestError(message)
 
 
 def check_plan(limits: JointLimits, plan: Trajectory, start: Sequence[float]) -> None:
     """
-    Refuse a plan whose exact positions leave a joint's range (beyond ``start``, rad or m).
+    Refuse a plan whose exact positions leave a joint's range widened to its ``start``.
 
+    :param start: where the plan starts, rad or m, ``(joints,)``.
     :raises RequestError: e.g. ``the plan would take joint 'joint_2' to 2.95 rad, outside
         its range [-2.9, 2.9] rad (…): …``.
     """
@@ -179,9 +216,10 @@ def check_plan(limits: JointLimits, plan: Trajectory, start: Sequence[float]) ->
             broken = _outside(limits, index, float(value))
             if broken != bound:
                 continue
-            if (bound == 'lower' and value >= start[index]) or \
-                    (bound == 'upper' and value <= start[index]):
-                continue  # a start outside the range may stay where it is
+            slack = POSITION_TOLERANCE * max(1.0, abs(start[index]))
+            if (bound == 'lower' and value >= start[index] - slack) or \
+                    (bound == 'upper' and value <= start[index] + slack):
+                continue  # a start outside the range may stay there or come back
             raise RequestError(
                 f'the plan would take joint {limits.joints[index]!r} to {value:.6g} '
                 f'{limits.units[index]}, outside its range {_range(limits, index)}: the '

@@ -4,8 +4,8 @@ The node's joint limits: the robot's URDF and the ``min_position``/``max_positio
 The URDF comes from the ``robot_description`` topic (``std_msgs/String``, reliable,
 transient local, depth 1, as ``robot_state_publisher`` publishes it) or from the
 ``robot_description`` parameter; whichever was given last is in force (an empty parameter:
-none). Its joints' ``lower``/``upper``/``velocity`` limits are read with urdfdom-py
-(:func:`traj_gen_ros.node.urdf_limits.urdf_limits`) and merged with the parameters
+none). Its joints' ``lower``/``upper``/``velocity`` limits are read
+(:func:`traj_gen_ros.node.urdf_limits.urdf_limits`, urdfdom's rules) and merged with the parameters
 (:func:`~traj_gen_ros.node.urdf_limits.merge_limits`): the tighter bound wins, and the URDF
 velocity limit lowers ``max_velocity``. Every change of the limits in force is logged
 (INFO) with where each bound came from
@@ -101,8 +101,6 @@ class NodeLimits:
 
     def _report_urdf(self) -> None:
         logger = self._node.get_logger()
-        for warning in self._urdf.warnings:
-            logger.info(f'URDF: {warning}')
         if self.source != 'none':
             absent = [name for name, kind in zip(self._joints, self._urdf.types, strict=True)
                       if kind == ABSENT]

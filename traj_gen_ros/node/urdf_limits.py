@@ -1,15 +1,18 @@
 """
 Joint limits from a URDF robot description, merged with the node's parameters.
 
-No ROS import: the URDF is an XML string (what ``robot_description`` holds), parsed with
-``urdf_parser_py`` (PyPI ``urdfdom-py``, the ROS URDF parser). Semantics are urdfdom's:
+No ROS import: the URDF is an XML string (what ``robot_description`` holds), read by
+:func:`traj_gen_ros.node.urdf_joints.read_joints` (only each joint's ``name``, ``type``,
+``<limit>`` and ``<mimic>``, with urdfdom's rules). For the trajectory joints:
 
-- ``revolute`` and ``prismatic`` joints must have a ``<limit>`` element; its ``lower`` and
+- ``revolute`` and ``prismatic`` joints must have a ``<limit>``; its ``lower`` and
   ``upper`` default to 0 (so a joint whose limit gives neither cannot move), its
-  ``velocity`` is required. Units: rad and rad/s (revolute), m and m/s (prismatic).
-- ``continuous`` joints have no position limits; a ``<limit>`` on them gives a velocity.
-- ``fixed``, ``floating`` and ``planar`` joints have no single coordinate to plan: naming
-  one as a trajectory joint is an error.
+  ``velocity`` must be > 0. Units: rad and rad/s (revolute), m and m/s (prismatic).
+- ``continuous`` joints have no position limits (a ``lower``/``upper`` there is ignored,
+  as KDL and MoveIt do); a ``<limit>`` on them gives a velocity.
+- a mimic joint (``<mimic>``) follows another one and is never commanded, and ``fixed``,
+  ``floating`` and ``planar`` joints have no single coordinate to plan: naming one as a
+  trajectory joint is an error.
 - A joint absent from the URDF has no URDF limits.
 
 The limits in force are the tighter of the URDF and the parameters ``min_position``,
@@ -22,14 +25,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 import math
-import re
-import threading
 
-from lxml import etree
 import numpy as np
-from urdf_parser_py import xml_reflection
-from urdf_parser_py.urdf import URDF as UrdfRobot  # noqa: N811 (a class)
-from urdf_parser_py.xml_reflection import core as xml_core
+from traj_gen_ros.node.urdf_joints import read_joints, UrdfJoint
 
 URDF = 'urdf'
 PARAMETER = 'parameter'
@@ -39,8 +37,6 @@ _MOVABLE = ('revolute', 'continuous', 'prismatic')
 _SOURCE_TEXT = {URDF: 'URDF', NONE: 'none'}
 _PARAMETER_NAME = {'lower': 'min_position', 'upper': 'max_position',
                    'velocity': 'max_velocity'}
-_XML_DECLARATION = re.compile(r'^\s*<\?xml[^>]*\?>')
-_PARSER_LOCK = threading.Lock()  # urdf_parser_py reports warnings through a module global
 
 
 def _frozen(values: Sequence[float]) -> np.ndarray:
@@ -59,7 +55,6 @@ class UrdfLimits:
     :ivar upper: upper position limits, rad or m, ``(joints,)``.
     :ivar velocity: velocity limits, rad/s or m/s, ``(joints,)``.
     :ivar types: each joint's URDF type, or :data:`ABSENT`.
-    :ivar warnings: what urdf_parser_py would have printed (unknown tags, …).
     """
 
     joints: tuple[str, ...]
@@ -67,7 +62,6 @@ class UrdfLimits:
     upper: np.ndarray
     velocity: np.ndarray
     types: tuple[str, ...]
-    warnings: tuple[str, ...] = ()
 
     @classmethod
     def unlimited(cls, joints: Sequence[str]) -> UrdfLimits:
@@ -102,6 +96,7 @@ class JointLimits:
     :ivar velocity: velocity limits, rad/s or m/s, ``(joints,)``; inf: none.
     :ivar velocity_source: per joint :data:`URDF`, :data:`PARAMETER` or :data:`NONE`.
     :ivar units: per joint ``'rad'``, or ``'m'`` for a prismatic joint.
+    :ivar types: per joint its URDF type, or :data:`ABSENT`.
     """
 
     joints: tuple[str, ...]
@@ -109,47 +104,7 @@ class JointLimits:
     velocity: np.ndarray
     velocity_source: tuple[str, ...]
     units: tuple[str, ...]
-
-
-def _one_line(text: object) -> str:
-    return ' '.join(str(text).split())
-
-
-def parse_urdf(urdf_xml: str | bytes) -> tuple[UrdfRobot, tuple[str, ...]]:
-    """
-    Parse a URDF document with urdf_parser_py, quietly.
-
-    :param urdf_xml: the XML text (an XML declaration with an encoding is allowed).
-    :return: the parsed robot, and what the parser reported (unknown tags or attributes,
-        …) instead of printing it to stderr, one line each.
-    :raises ValueError: not well-formed XML, not a ``<robot>``, or not a valid URDF; one
-        line saying why.
-    """
-    if isinstance(urdf_xml, str):
-        urdf_xml = _XML_DECLARATION.sub('', urdf_xml, count=1)
-    if not urdf_xml.strip():
-        raise ValueError('invalid URDF: the robot description is empty')
-    try:
-        root = etree.fromstring(urdf_xml)
-    except etree.XMLSyntaxError as error:
-        raise ValueError(f'invalid URDF: not well-formed XML: {_one_line(error)}') from None
-    if root.tag != 'robot':
-        raise ValueError(f'invalid URDF: the root element is <{root.tag}>, not <robot>')
-    warnings: list[str] = []
-    with _PARSER_LOCK:
-        saved = xml_core.on_error, xml_reflection.on_error
-        xml_core.on_error = xml_reflection.on_error = warnings.append
-        try:
-            robot = UrdfRobot.from_xml_string(etree.tostring(root))
-        except xml_core.ParseError as error:
-            detail = _one_line(error).removeprefix('ParseError in ')
-            raise ValueError(f'invalid URDF: {detail}') from None
-        except Exception as error:  # noqa: BLE001 - whatever the parser trips on
-            raise ValueError(f'invalid URDF: {type(error).__name__}: {_one_line(error)}') \
-                from None
-        finally:
-            xml_core.on_error, xml_reflection.on_error = saved
-    return robot, tuple(_one_line(warning) for warning in warnings)
+    types: tuple[str, ...] = ()
 
 
 def urdf_limits(urdf_xml: str | bytes, joints: Sequence[str]) -> UrdfLimits:
@@ -160,16 +115,11 @@ def urdf_limits(urdf_xml: str | bytes, joints: Sequence[str]) -> UrdfLimits:
     :param joints: the trajectory's joint names, in order.
     :return: per joint lower/upper (rad or m) and velocity (rad/s or m/s) limits, ±inf
         where the URDF has none (continuous joints' positions, absent joints).
-    :raises ValueError: an invalid URDF, a joint defined twice, a revolute or prismatic
-        joint without ``<limit>``, a fixed/floating/planar trajectory joint, a NaN limit,
-        ``lower > upper`` or a velocity limit that is not > 0.
+    :raises ValueError: an invalid URDF (:func:`read_joints`), a revolute or prismatic
+        joint without ``<limit>``, a fixed/floating/planar or mimic trajectory joint, a
+        NaN limit, ``lower > upper`` or a velocity limit that is not > 0.
     """
-    robot, warnings = parse_urdf(urdf_xml)
-    by_name = {}
-    for joint in robot.joints:
-        if joint.name in by_name:
-            raise ValueError(f"invalid URDF: joint '{joint.name}' is defined twice")
-        by_name[joint.name] = joint
+    by_name = read_joints(urdf_xml)
     lower, upper, velocity, types = [], [], [], []
     for name in joints:
         joint = by_name.get(name)
@@ -182,34 +132,36 @@ def urdf_limits(urdf_xml: str | bytes, joints: Sequence[str]) -> UrdfLimits:
         velocity.append(bounds[2])
         types.append(kind)
     return UrdfLimits(tuple(joints), _frozen(lower), _frozen(upper), _frozen(velocity),
-                      tuple(types), warnings)
+                      tuple(types))
 
 
-def _joint_bounds(joint: object) -> tuple[float, float, float]:
-    """Return ``(lower, upper, velocity)`` of one URDF joint (urdfdom semantics)."""
+def _joint_bounds(joint: UrdfJoint) -> tuple[float, float, float]:
+    """Return ``(lower, upper, velocity)`` of one URDF trajectory joint (urdfdom semantics)."""
     name, kind, limit = joint.name, joint.type, joint.limit
     if kind not in _MOVABLE:
         raise ValueError(f"URDF joint '{name}' is {kind}: only revolute, continuous and "
                          'prismatic joints can be trajectory joints')
+    if joint.mimic is not None:
+        raise ValueError(f"URDF joint '{name}' mimics joint '{joint.mimic}' (<mimic>): it "
+                         'follows that joint and is not commanded; remove it from joints')
     if limit is None:
         if kind == 'continuous':
             return -math.inf, math.inf, math.inf
         raise ValueError(f"invalid URDF: {kind} joint '{name}' has no <limit> element "
                          '(required for revolute and prismatic joints)')
-    values = {'lower': limit.lower, 'upper': limit.upper, 'velocity': limit.velocity}
-    for key, value in values.items():
-        if math.isnan(value):
+    for key in ('lower', 'upper', 'velocity'):
+        if math.isnan(limit[key]):
             raise ValueError(f"invalid URDF: joint '{name}' has {key} limit NaN")
-    if not values['velocity'] > 0:
-        raise ValueError(f"URDF joint '{name}' has velocity limit {values['velocity']:g}: "
+    if not limit['velocity'] > 0:
+        raise ValueError(f"URDF joint '{name}' has velocity limit {limit['velocity']:g}: "
                          'it must be > 0 for the joint to move')
     if kind == 'continuous':
-        return -math.inf, math.inf, values['velocity']
-    lower, upper = values['lower'], values['upper']
+        return -math.inf, math.inf, limit['velocity']
+    lower, upper = limit['lower'], limit['upper']
     if lower > upper or lower == math.inf or upper == -math.inf:
         raise ValueError(f"invalid URDF: joint '{name}' has lower limit {lower:g} and upper "
                          f'limit {upper:g}: lower must be <= upper')
-    return lower, upper, values['velocity']
+    return lower, upper, limit['velocity']
 
 
 def _per_joint(values: float | Sequence[float], name: str, count: int) -> np.ndarray:
@@ -264,7 +216,7 @@ def merge_limits(urdf: UrdfLimits, *, min_position: float | Sequence[float] = -m
             f'[{parameter_lower[index]:g}, {parameter_upper[index]:g}] {unit}')
     return JointLimits(urdf.joints, PositionLimits(_frozen(lower), _frozen(upper),
                                                    lower_source, upper_source),
-                       _frozen(velocity), velocity_source, units)
+                       _frozen(velocity), velocity_source, units, urdf.types)
 
 
 def _sources(from_urdf: np.ndarray, from_parameter: np.ndarray, unlimited: float,
