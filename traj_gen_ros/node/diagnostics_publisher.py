@@ -59,9 +59,16 @@ class NodeDiagnostics:
     """The ``/diagnostics`` publisher and its timer."""
 
     def __init__(self, node: Node, config: Callable[[], Config], limits: NodeLimits,
-                 answers: CountingAnswers, meter: RateMeter) -> None:
-        """Publish the node's status every :data:`PERIOD` s from the node's parts."""
+                 answers: CountingAnswers, meter: RateMeter,
+                 measured: Callable[[], tuple[int, str, list[tuple[str, str]]]] | None = None
+                 ) -> None:
+        """
+        Publish the node's status every :data:`PERIOD` s from the node's parts.
+
+        ``measured`` gives the measured state's status (``joint_topic`` set), else None.
+        """
         self._node = node
+        self._measured = measured
         self._config = config
         self._limits = limits
         self._answers = answers
@@ -95,7 +102,8 @@ class NodeDiagnostics:
             joints=len(config.joints), profile=config.profile,
             motion=self._answers.motions.describe(now.nanoseconds),
             limits=self._limits_summary(config), urdf_source=self._limits.source,
-            urdf_problem=self._limits.problem, counts=self._answers.counts)
+            urdf_problem=self._limits.problem, counts=self._answers.counts,
+            feedback=self._measured() if self._measured else None)
         status = DiagnosticStatus(level=bytes([level]), name=self._name, message=message,
                                   hardware_id='',
                                   values=[KeyValue(key=k, value=v) for k, v in values])
