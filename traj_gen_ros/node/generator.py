@@ -29,6 +29,10 @@ Interface (all names relative, so namespaces and remapping work):
   with profile ``scurve``) and hold.
 * ``robot_description`` (``std_msgs/String``, transient local): the robot's URDF, in.
 * ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): the node's health, about 1 Hz.
+* ``joint_topic`` (``sensor_msgs/JointState``, best effort): the measured state, in
+  (:mod:`~traj_gen_ros.node.joint_feedback`); ``command_out_topic``
+  (``std_msgs/Float64MultiArray`` every tick, or ``trajectory_msgs/JointTrajectory`` per
+  plan: :mod:`~traj_gen_ros.node.commands_out`), out.
 """
 
 from __future__ import annotations
