@@ -5,7 +5,8 @@ Run as a subprocess (``python test/standin_robot.py --help``). Each joint follow
 latest command with a first-order lag (time constant ``--tau`` s) and is published on
 ``--states`` at ``--rate`` Hz, names in reverse order, after ``--extra`` joints. A
 message ``[index, offset]`` on ``--nudge`` moves joint ``index`` by ``offset`` rad and
-holds it there for ``--nudge-hold`` s ("by hand": the commands are ignored meanwhile).
+holds it there for ``--nudge-hold`` s ("by hand": the commands are ignored meanwhile);
+the first nudge also ends ``--omit`` (a joint left out of the messages until then).
 """
 
 import argparse
@@ -26,8 +27,8 @@ def parse(argv):
     parser.add_argument('--start', default='', help='start positions, comma separated (rad)')
     parser.add_argument('--extra', default='', help='extra joint names listed first')
     parser.add_argument('--frozen', default='', help='a joint that never follows')
-    parser.add_argument('--omit', default='', help='a joint left out of the first messages')
-    parser.add_argument('--omit-for', type=float, default=0.0, help='s')
+    parser.add_argument('--omit', default='',
+                        help='a joint left out of every message until the first nudge')
     parser.add_argument('--stop-after', type=float, default=0.0, help='s; 0: never')
     parser.add_argument('--reliability', default='reliable', choices=['reliable', 'best_effort'])
     parser.add_argument('--tau', type=float, default=0.02, help='lag time constant, s')
@@ -49,6 +50,7 @@ class StandInRobot(Node):
         self.command = None
         self.held_until = [0.0] * len(self.names)
         self.began = time.monotonic()
+        self.omitting = bool(args.omit)
         reliability = (ReliabilityPolicy.RELIABLE if args.reliability == 'reliable'
                        else ReliabilityPolicy.BEST_EFFORT)
         self.publisher = self.create_publisher(
@@ -63,6 +65,7 @@ class StandInRobot(Node):
             self.command = list(message.data)
 
     def on_nudge(self, message):
+        self.omitting = False
         index, offset = int(message.data[0]), message.data[1]
         self.position[index] += offset
         self.held_until[index] = time.monotonic() + self.args.nudge_hold
@@ -78,7 +81,7 @@ class StandInRobot(Node):
                     self.position[index] += (self.command[index] - self.position[index]) * gain
         names = [n for n in self.args.extra.split(',') if n] + self.names[::-1]
         positions = [0.5] * (len(names) - len(self.names)) + self.position[::-1]
-        if self.args.omit and now - self.began < self.args.omit_for:
+        if self.omitting:
             keep = [i for i, n in enumerate(names) if n != self.args.omit]
             names, positions = [names[i] for i in keep], [positions[i] for i in keep]
         message = JointState(name=names, position=positions)

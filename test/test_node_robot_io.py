@@ -99,16 +99,21 @@ def test_waits_for_the_measured_state_then_starts_there():
         warn, _ = probe.diagnostic(lambda s, v: WAITING in s.message, '/diagnostics waiting')
         assert warn.level == DiagnosticStatus.WARN
         assert not probe.states and not probe.commands  # streams nothing meanwhile
-        # Extra joints, reversed order, best effort, joint_3 missing from the first 1.5 s.
+        # Extra joints, reversed order, best effort, joint_3 missing until the first nudge.
         robot = start_robot('--start', ','.join(map(str, START)), '--extra', 'gripper,base',
                             '--reliability', 'best_effort', '--omit', 'joint_3',
-                            '--omit-for', '1.5')
+                            '--nudge-hold', '0')
         try:
+            probe.spin_until(lambda: len(probe.measured) >= 20, 20.0, 'the robot')
+            assert all('joint_3' not in m.name for m in probe.measured)
+            status, _ = probe.goal({'joint_1': 0.5})  # lacking joint_3: still waiting
+            assert status.message == f'goal refused: {WAITING}'
+            assert not probe.states
+            probe.nudge.publish(Float64MultiArray(data=[0.0, 0.0]))  # now all joints
             probe.wait_ready()
             first = probe.states[0]
             assert list(first.name) == JOINTS
             assert list(first.position) == START and not any(first.velocity)
-            assert probe.measured and 'joint_3' not in probe.measured[0].name  # ignored
             # A motion: the robot follows the commands; no re-seed while it does.
             status, _ = probe.goal({'joint_1': 1.0, 'joint_4': -0.5})
             assert status.level == DiagnosticStatus.OK, status.message
