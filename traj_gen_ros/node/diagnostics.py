@@ -13,7 +13,9 @@ message and key/values:
   which one is in progress and how long it has left (or ``holding``);
 * :func:`node_status` puts them together: WARN when the achieved rate is below
   ``RATE_WARN_FRACTION`` of ``rate_hz``, when the last robot description was refused, or
-  when the setpoint has a joint outside its position range, OK otherwise.
+  when the setpoint has a joint outside its position range, OK otherwise; the measured
+  state's own status (``joint_topic``,
+  :meth:`traj_gen_ros.node.measured_state.MeasuredState.status`) can raise it to ERROR.
 
 Units: Hz, s, ns where named.
 """
@@ -25,6 +27,7 @@ from dataclasses import dataclass
 
 OK = 0
 WARN = 1
+ERROR = 2
 #: The achieved stream rate below this fraction of ``rate_hz`` is a warning.
 RATE_WARN_FRACTION = 0.9
 #: A window shorter than this (s) gives no rate (the first report, a jump of the clock).
@@ -107,7 +110,8 @@ class MotionLog:
 
 def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str,
                 motion: str, limits: str, urdf_source: str, urdf_problem: str,
-                counts: RequestCounts, outside: str = ''
+                counts: RequestCounts, outside: str = '',
+                feedback: tuple[int, str, list[tuple[str, str]]] | None = None
                 ) -> tuple[int, str, list[tuple[str, str]]]:
     """
     Build the node's diagnostic status: ``(level, message, [(key, value), …])``.
@@ -119,8 +123,13 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
     :param urdf_source: where the URDF in force came from, or ``none``.
     :param urdf_problem: why the last robot description was refused ('' if none was).
     :param outside: the setpoint's joints outside their range (``outside_ranges``), or ''.
+    :param feedback: the measured state's level, problem and values, or None (standalone).
     """
     problems = []
+    feedback_level = OK
+    if feedback is not None and feedback[1]:
+        feedback_level = feedback[0]
+        problems.append(feedback[1])
     if rate is not None and rate < RATE_WARN_FRACTION * rate_hz:
         problems.append(f'stream rate {rate:.1f} Hz is below '
                         f'{RATE_WARN_FRACTION:.0%} of rate_hz {rate_hz:g}')
@@ -130,7 +139,7 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
         problems.append(f'{outside}: it may hold there or move toward its range')
     measured = 'not measured yet' if rate is None else f'{rate:.1f}'
     if problems:
-        level, message = WARN, '; '.join(problems)
+        level, message = max(WARN, feedback_level), '; '.join(problems)
     else:
         shown = f'{rate:.1f}' if rate is not None else f'{rate_hz:g}'
         level, message = OK, f'streaming {joints} joints at {shown} Hz; {motion}'
@@ -150,4 +159,6 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
         values.append(('robot_description refused', urdf_problem))
     if outside:
         values.append(('outside range', outside))
+    if feedback is not None:
+        values += feedback[2]
     return level, message, values

@@ -63,15 +63,19 @@ class NodeDiagnostics:
 
     def __init__(self, node: Node, config: Callable[[], Config], limits: NodeLimits,
                  answers: CountingAnswers, meter: RateMeter,
-                 setpoint: Callable[[], Sequence[float]]) -> None:
+                 setpoint: Callable[[], Sequence[float]],
+                 measured: Callable[[], tuple[int, str, list[tuple[str, str]]]] | None = None
+                 ) -> None:
         """
         Publish the node's status every :data:`PERIOD` s from the node's parts.
 
         :param setpoint: returns the position last published (rad or m).
+        :param measured: gives the measured state's status (``joint_topic`` set), else None.
         """
         self._node = node
         self._setpoint = setpoint
         self._outside = ''
+        self._measured = measured
         self._config = config
         self._limits = limits
         self._answers = answers
@@ -123,7 +127,8 @@ class NodeDiagnostics:
             motion=self._answers.motions.describe(now.nanoseconds),
             limits=self._limits_summary(config), urdf_source=self._limits.source,
             urdf_problem=self._limits.problem, counts=self._answers.counts,
-            outside=self.check_ranges())
+            outside=self.check_ranges(),
+            feedback=self._measured() if self._measured else None)
         status = DiagnosticStatus(level=bytes([level]), name=self._name, message=message,
                                   hardware_id='',
                                   values=[KeyValue(key=k, value=v) for k, v in values])

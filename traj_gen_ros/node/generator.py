@@ -29,16 +29,23 @@ Interface (all names relative, so namespaces and remapping work):
   with profile ``scurve``) and hold.
 * ``robot_description`` (``std_msgs/String``, transient local): the robot's URDF, in.
 * ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): the node's health, about 1 Hz.
+* ``joint_topic`` (``sensor_msgs/JointState``, best effort): the measured state, in
+  (:mod:`~traj_gen_ros.node.joint_feedback`); ``command_out_topic``
+  (``std_msgs/Float64MultiArray`` every tick, or ``trajectory_msgs/JointTrajectory`` per
+  plan: :mod:`~traj_gen_ros.node.commands_out`), out.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 import gc
+import os
 import signal
 import sys
 import threading
 import time
 
+import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.exceptions import ParameterException
@@ -48,13 +55,22 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
+from traj_gen_ros.node.commands_out import (
+    check_command_out_type,
+    controller_points,
+    FLOAT64_MULTI_ARRAY,
+)
 from traj_gen_ros.node.config import Config, initial_state, make_config
 from traj_gen_ros.node.diagnostics import RateMeter
 from traj_gen_ros.node.diagnostics_publisher import CountingAnswers, NodeDiagnostics
-from traj_gen_ros.node.motion import held
+from traj_gen_ros.node.joint_feedback import JointFeedback
+from traj_gen_ros.node.measured_state import MeasuredState
+from traj_gen_ros.node.motion import held, PlannedMotion
 from traj_gen_ros.node.parameters import declare_parameters
 from traj_gen_ros.node.realtime import (
+    choose_priority,
     EXECUTOR_FIFO_PRIORITY,
     favour_calling_thread,
     realtime_calling_thread,
@@ -63,6 +79,7 @@ from traj_gen_ros.node.request_handler import REQUEST_DEPTH, RequestHandler
 from traj_gen_ros.node.request_thread import NotForTheExecutor, RequestThread
 from traj_gen_ros.node.robot_description import NodeLimits
 from traj_gen_ros.node.stream import Stream
+from traj_gen_ros.node.wire import joint_trajectory_cdr
 from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
@@ -85,19 +102,35 @@ class TrajectoryGenerator(Node):
         self._config = self._read_config()
         initial = initial_state(self._config.joints,
                                 self.get_parameter('initial_positions').value)
-        joint_states = self.create_publisher(
-            JointState, 'joint_states',
-            QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+        publish_states = self.get_parameter('publish_joint_states').value
+        measured = self._measured_state(publish_states)
+        reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        publish = (self.create_publisher(JointState, 'joint_states', reliable).publish
+                   if publish_states else _nothing)
+        command_type = check_command_out_type(self.get_parameter('command_out_type').value)
+        command_topic = self.get_parameter('command_out_topic').value
+        command_message = (Float64MultiArray if command_type == FLOAT64_MULTI_ARRAY
+                           else JointTrajectory)
+        commands = (self.create_publisher(command_message, command_topic, reliable).publish
+                    if command_topic else None)
         self._node_clock = self.get_clock()  # ROS time: use_sim_time makes it follow /clock
         self._rate_meter = RateMeter(self._now_ns() * 1e-9)  # for /diagnostics
         self._stream = Stream(held(initial), self._config.joints, self._now_ns,
                               lambda: self._config.period_ns,
-                              self._rate_meter.wrap(joint_states.publish),
-                              self.get_logger().error)
+                              self._rate_meter.wrap(publish), self.get_logger().error,
+                              waiting=measured is not None,
+                              publish_command=(commands if command_message is Float64MultiArray
+                                               else None))
         self.context.on_shutdown(self._stream.stopping.set)  # SIGINT/SIGTERM: stream ends
         self._answers = CountingAnswers(self, lambda: self._config.joints)
-        self._requests = RequestHandler(lambda: self._config, self._stream, self._answers,
-                                        self._now_ns, self.get_logger().error)
+        self._requests = RequestHandler(
+            lambda: self._config, self._stream, self._answers, self._now_ns,
+            self.get_logger().error, refusal=measured.refusal if measured else lambda: None,
+            on_plan=(self._plan_publisher(commands) if command_message is JointTrajectory
+                     and commands else lambda start_ns, motion: None))
+        #: The measured state in (``joint_topic``), or None (standalone).
+        self.feedback = (JointFeedback(self, measured, self._stream, self._requests)
+                         if measured else None)
         # Served by the request thread, not the executor (request_thread).
         requests_only = NotForTheExecutor()
         # Raw: a goal's names and positions are read off the wire (microseconds, against
@@ -117,14 +150,42 @@ class TrajectoryGenerator(Node):
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._diagnostics = NodeDiagnostics(
             self, lambda: self._config, self._limits, self._answers, self._rate_meter,
-            lambda: self._stream.start_state(self._stream.last_published())[0].position)
+            lambda: self._stream.start_state(self._stream.last_published())[0].position,
+            measured.status if measured else None)
         self._diagnostics.check_ranges()  # a start outside the limits is said at once
         self._answers.trajectory(0, held(initial), self._config.rate_hz)  # warm up
         priority = self._stream.start()
         self._request_thread.start()
+        waiting = f', waiting for the measured state on {measured.topic}' if measured else ''
         self.get_logger().info(
             f'streaming {len(self._config.joints)} joints at {self._config.rate_hz:g} Hz '
-            f'({priority}), profile {self._config.profile}')
+            f'({priority}), profile {self._config.profile}{waiting}')
+
+    def _plan_publisher(self, publish: Callable[[bytes], None]
+                        ) -> Callable[[int, PlannedMotion], None]:
+        """Publish each plan spliced in as a JTC's ``JointTrajectory`` (``command_out_type``)."""
+        def publish_plan(start_ns: int, motion: PlannedMotion) -> None:
+            times_ns, *values = controller_points(motion)
+            if not all(np.isfinite(v).all() for v in values if v is not None):
+                self.get_logger().error('command_out_topic: a non-finite point: not sent')
+                return
+            publish(joint_trajectory_cdr(start_ns, self._config.joints, times_ns, *values))
+        return publish_plan
+
+    def _measured_state(self, publish_states: bool) -> MeasuredState | None:
+        """Check the ``joint_topic`` parameters; None when standalone; ValueError if bad."""
+        topic = self.get_parameter('joint_topic').value
+        if not topic:
+            return None
+        resolved = self.resolve_topic_name(topic)
+        if publish_states and resolved == self.resolve_topic_name('joint_states'):
+            raise ValueError(f'joint_topic {topic!r} is {resolved}, where this node publishes '
+                             'its own setpoint: it would read it back as the measured state. '
+                             'Remap joint_states, or set publish_joint_states false when a '
+                             'joint_state_broadcaster publishes it')
+        return MeasuredState(self._config.joints, resolved,
+                             self.get_parameter('state_tolerance').value,
+                             self.get_parameter('joint_topic_timeout').value)
 
     # ------------------------------------------------------------------ requests
 
@@ -183,6 +244,11 @@ class TrajectoryGenerator(Node):
         super().destroy_node()
 
 
+def _nothing(data: bytes) -> None:
+    """Publish nothing (``publish_joint_states`` false)."""
+    del data
+
+
 def main(args: list[str] | None = None) -> int:
     """
     Run the generator until SIGINT/SIGTERM; return the exit status.
@@ -191,6 +257,11 @@ def main(args: list[str] | None = None) -> int:
     s: a signal that arrives while the node or the executor is being built interrupts
     nothing half-made, and the node is then destroyed in order (exit status 0).
     """
+    try:
+        choose_priority(os.environ)  # before rclpy starts its threads
+    except ValueError as error:
+        print(f'{NODE_NAME}: {error}', file=sys.stderr)
+        return 1
     favour_calling_thread()  # before rclpy starts its threads: they inherit it
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     stop = threading.Event()

@@ -32,15 +32,17 @@ import math
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from traj_gen_ros.node.commands_out import COMMAND_OUT_TYPES, FLOAT64_MULTI_ARRAY
 from traj_gen_ros.node.config import DEFAULT_MAX_JERK, MAX_RATE_HZ, MIN_RATE_HZ, PROFILES
+from traj_gen_ros.node.measured_state import DEFAULT_STATE_TOLERANCE, DEFAULT_TIMEOUT
 
 DEFAULT_JOINTS = [f'joint_{index}' for index in range(1, 7)]
 PER_JOINT = 'one value for all joints or one per joint'
 #: Parameters declared as doubles: an integer is stored as a double.
-DOUBLES = ('rate_hz',)
+DOUBLES = ('rate_hz', 'joint_topic_timeout')
 #: Per-joint parameters, declared as double arrays: one number is stored as ``[number]``.
 DOUBLE_ARRAYS = ('initial_positions', 'max_velocity', 'max_acceleration', 'lspb_acceleration',
-                 'max_jerk', 'min_position', 'max_position')
+                 'max_jerk', 'min_position', 'max_position', 'state_tolerance')
 
 _DOUBLE = Parameter.Type.DOUBLE
 _DOUBLE_ARRAY = Parameter.Type.DOUBLE_ARRAY
@@ -110,6 +112,35 @@ def descriptors(joint_count: int) -> dict[str, tuple[object, ParameterDescriptor
             description='URDF of the robot (XML); its joint limits apply. A message on the '
                         'robot_description topic replaces it; empty: none.',
             type=ParameterType.PARAMETER_STRING)),
+        'joint_topic': ('', ParameterDescriptor(
+            description='Measured joint state in (sensor_msgs/JointState, e.g. /joint_states '
+                        'of a joint_state_broadcaster): the first message is the start, the '
+                        'arm is the reference; empty: standalone (read only).',
+            type=ParameterType.PARAMETER_STRING, read_only=True)),
+        'publish_joint_states': (True, ParameterDescriptor(
+            description='Publish the setpoint on joint_states; false when a '
+                        'joint_state_broadcaster owns joint_states (read only).',
+            type=ParameterType.PARAMETER_BOOL, read_only=True)),
+        'command_out_topic': ('', ParameterDescriptor(
+            description='Commands out to a ros2_control controller, e.g. '
+                        '/forward_position_controller/commands; empty: none (read only).',
+            type=ParameterType.PARAMETER_STRING, read_only=True)),
+        'command_out_type': (FLOAT64_MULTI_ARRAY, ParameterDescriptor(
+            description='Type of command_out_topic: the setpoint every tick, or each plan '
+                        'for a joint_trajectory_controller (read only).',
+            type=ParameterType.PARAMETER_STRING, read_only=True,
+            additional_constraints=' | '.join(COMMAND_OUT_TYPES))),
+        'joint_topic_timeout': (DEFAULT_TIMEOUT, ParameterDescriptor(
+            description='No valid measured state for this long, s: brake and refuse '
+                        'requests until it returns; 0: never (read only).',
+            type=ParameterType.PARAMETER_DOUBLE, read_only=True,
+            floating_point_range=[FloatingPointRange(from_value=0.0, to_value=3600.0)])),
+        'state_tolerance': ([DEFAULT_STATE_TOLERANCE], ParameterDescriptor(
+            description=f'Measured position farther than this from the held setpoint while '
+                        f'idle: hold where the arm is ({PER_JOINT}; each >= 0, 0: never; '
+                        f'rad or m; read only).',
+            type=ParameterType.PARAMETER_DOUBLE_ARRAY, read_only=True,
+            additional_constraints=f'{PER_JOINT}; each >= 0, 0: never; rad or m')),
     }
 
 

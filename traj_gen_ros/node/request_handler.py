@@ -52,7 +52,7 @@ from std_srvs.srv import Trigger
 from traj_gen_ros.core.kinematic_limits import JointError
 from traj_gen_ros.node.answers import Answers, Request
 from traj_gen_ros.node.config import Config
-from traj_gen_ros.node.motion import PlannedMotion, State
+from traj_gen_ros.node.motion import held, PlannedMotion, State
 from traj_gen_ros.node.parsing import (
     MAX_VIA_POINTS,
     parse_goal,
@@ -111,13 +111,21 @@ class RequestHandler:
 
     def __init__(self, config: Callable[[], Config], stream: Stream, answers: Answers,
                  now_ns: Callable[[], int], log_error: Callable[[str], None],
-                 elapsed_ns: Callable[[], int] = time.perf_counter_ns) -> None:
+                 elapsed_ns: Callable[[], int] = time.perf_counter_ns, *,
+                 refusal: Callable[[], str | None] = lambda: None,
+                 on_plan: Callable[[int, PlannedMotion], None] = lambda start_ns, motion: None
+                 ) -> None:
         """
         Handle requests with the current ``config()``, on the node clock ``now_ns()``.
 
-        ``elapsed_ns`` times the planning (ns; a test gives its fake clock).
+        ``elapsed_ns`` times the planning (ns; a test gives its fake clock). ``refusal()``
+        gives a reason to refuse every request now (no measured state), or ``None``.
+        ``on_plan(start_ns, motion)`` is told every motion spliced in (requests, holds,
+        brakes), e.g. for the ``JointTrajectory`` command output.
         """
         self._elapsed_ns = elapsed_ns
+        self._refusal = refusal
+        self._on_plan = on_plan
         self._config = config
         self._stream = stream
         self._answers = answers
@@ -187,10 +195,15 @@ class RequestHandler:
         Returns the motion spliced in, or ``None`` when it was refused (answered ERROR).
         """
         config = self._config()
+        reason = self._refusal()
+        if reason is not None:
+            self._answers.refused(request, reason)
+            return None
         placed = self._plan_and_splice(request, plan, config)
         if placed is None:
             return None
         motion, now_ns, start_ns, first_ns = placed
+        self._on_plan(start_ns, motion)
         waited = first_ns - self._now_ns() <= SAMPLE_AFTER_FIRST_NS
         if waited:
             self._stream.wait_published(first_ns, ANSWER_WAIT)
@@ -271,13 +284,44 @@ class RequestHandler:
         return None
 
     def _brake(self, config: Config) -> None:
-        """Brake from the next tick (after a failure nothing should cause)."""
-        start_ns = self._stream.next_start()
-        state, _ = self._stream.start_state(start_ns)
-        try:
-            self._stream.splice(start_ns, plan_stop(config, state))
-        except ValueError as error:  # a non-finite state: the stream holds its last setpoint
-            self._log_error(f'braking failed: {error!r}')
+        """Brake from the next tick (after a failure, or when the measured state is lost)."""
+        for _ in range(PLAN_ATTEMPTS):
+            start_ns = self._stream.next_start()
+            state, _ = self._stream.start_state(start_ns)
+            try:
+                motion = plan_stop(config, state)
+            except ValueError as error:  # a non-finite state: the stream holds its last
+                self._log_error(f'braking failed: {error!r}')
+                return
+            if self._stream.splice(start_ns, motion) is not None:
+                self._on_plan(start_ns, motion)
+                return
+
+    def brake(self) -> None:
+        """Brake within the limits from the next tick and hold (no answer: no request)."""
+        with self._lock:
+            self._brake(self._config())
+
+    def hold(self, target: Callable[[State, bool], np.ndarray | None]) -> bool:
+        """
+        Hold from the next tick where ``target(state there, moving)`` says (rad), if it does.
+
+        The measured state re-seeds the setpoint so: one step to that position at the
+        tick, then at rest there. ``target`` runs under the request lock, so no request
+        is planned meanwhile; ``None`` leaves the schedule alone. True once spliced in.
+        """
+        with self._lock:
+            for _ in range(PLAN_ATTEMPTS):
+                start_ns = self._stream.next_start()
+                state, _ = self._stream.start_state(start_ns)
+                position = target(state, self._stream.moving_at(start_ns))
+                if position is None:
+                    return False
+                motion = held(position, 'hold', 'measured state')
+                if self._stream.splice(start_ns, motion) is not None:
+                    self._on_plan(start_ns, motion)
+                    return True
+        return False
 
     def stop(self, response: Trigger.Response) -> Trigger.Response:
         """``~/stop``: brake within ``max_acceleration`` from the next tick, then hold."""

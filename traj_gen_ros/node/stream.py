@@ -28,7 +28,7 @@ import numpy as np
 from traj_gen_ros.node.motion import held, PlannedMotion, State
 from traj_gen_ros.node.realtime import raise_priority
 from traj_gen_ros.node.schedule import Schedule
-from traj_gen_ros.node.wire import joint_names_cdr, joint_state_cdr
+from traj_gen_ros.node.wire import float64_multi_array_cdr, joint_names_cdr, joint_state_cdr
 
 
 class Stream:
@@ -36,13 +36,20 @@ class Stream:
 
     def __init__(self, first: PlannedMotion, joint_names: Sequence[str],
                  now_ns: Callable[[], int], period_ns: Callable[[], int],
-                 publish: Callable[[bytes], None], on_error: Callable[[str], None]) -> None:
+                 publish: Callable[[bytes], None], on_error: Callable[[str], None],
+                 waiting: bool = False,
+                 publish_command: Callable[[bytes], None] | None = None) -> None:
         """
         Prepare to stream ``first`` (a hold); :meth:`start` starts the thread.
+
+        ``waiting``: publish nothing until :meth:`seed` gives the first setpoint (the
+        measured state of ``joint_topic``).
 
         :param now_ns: the node clock, integer nanoseconds.
         :param period_ns: the current stream period (read every tick: ``rate_hz`` may change).
         :param publish: sends one serialised ``JointState``.
+        :param publish_command: sends the same setpoint's positions as a serialised
+            ``Float64MultiArray`` (``command_out_topic``), or None.
         :param on_error: logs a failed publish (the stream goes on).
         """
         self._schedule = Schedule(first)
@@ -51,6 +58,7 @@ class Stream:
         self._now_ns = now_ns
         self._period_ns = period_ns
         self._publish = publish
+        self._publish_command = publish_command
         self._on_error = on_error
         # Guards the schedule, the last published time and the next tick; notified when a
         # setpoint has been published.
@@ -59,6 +67,7 @@ class Stream:
         self._last_published_ns = -(2 ** 62)  # when the last setpoint was sampled
         self._last_tick_ns = -(2 ** 62)  # the tick (deadline) it was published for
         self._next_tick_ns = now_ns()
+        self._waiting = waiting
         self.stopping = threading.Event()
         self.priority = 'not started'
         self._started = threading.Event()
@@ -77,6 +86,18 @@ class Stream:
             self._thread.join(timeout)
 
     # ------------------------------------------------------------------ executor side
+
+    def seed(self, position: np.ndarray) -> None:
+        """Replace the schedule by a hold at ``position`` (rad) and start publishing."""
+        with self._lock:
+            self._schedule = Schedule(held(position))
+            self._last_position = np.array(position, dtype=float)
+            self._waiting = False
+
+    @property
+    def waiting(self) -> bool:
+        """Whether the stream waits for its first setpoint (:meth:`seed`)."""
+        return self._waiting
 
     def next_start(self, margin_ns: int = 0) -> int:
         """
@@ -189,8 +210,8 @@ class Stream:
         """Sample the schedule now and publish it as the setpoint of tick ``tick_ns``."""
         with self._lock:
             now_ns = self._now_ns()
-            if now_ns <= self._last_published_ns:
-                return  # the clock has not moved on (simulated time)
+            if now_ns <= self._last_published_ns or self._waiting:
+                return  # the clock has not moved on (simulated time), or nothing to stream
             state = self._schedule.setpoint(now_ns)
             position, velocity = state.position, state.velocity
             finite = np.count_nonzero(np.isfinite(position)) + \
@@ -204,5 +225,7 @@ class Stream:
         if not finite:
             self._on_error('stream: the schedule gave a non-finite setpoint: holding')
         self._publish(joint_state_cdr(now_ns, self._names_cdr, position, velocity))
+        if self._publish_command is not None:
+            self._publish_command(float64_multi_array_cdr(position))
         with self._published:
             self._published.notify_all()

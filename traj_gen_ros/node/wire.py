@@ -1,9 +1,10 @@
 """
 The messages the node reads and writes in CDR, with numpy: its wire format in and out.
 
-Out: ``JointTrajectory`` and ``JointState``. In: a goal's ``frame_id``, names and
-positions (:func:`read_goal`), and a via request's point count (:func:`peek_via_points`),
-so a huge message is refused before it is deserialised.
+Out: ``JointTrajectory``, ``JointState`` and ``Float64MultiArray``. In: a goal's
+``frame_id``, names and positions (:func:`read_goal`; also the measured state of
+``joint_topic``), and a via request's point count (:func:`peek_via_points`), so a huge
+message is refused before it is deserialised.
 
 Building a 1000-point ``JointTrajectory`` as rclpy message objects costs tens of
 milliseconds (one Python object per point, one check per float). Its wire form is plain:
@@ -31,12 +32,14 @@ _ENCAPSULATION = b'\x00\x01\x00\x00'
 _NANOSECONDS_PER_SECOND = 1_000_000_000
 
 
-def _point_dtype(joint_count: int, starts_on_eight: bool) -> np.dtype:
+def _point_dtype(joint_count: int, starts_on_eight: bool,
+                 with_accelerations: bool = True) -> np.dtype:
     """
     Give the packed layout of one ``JointTrajectoryPoint``.
 
     A point starting 8-aligned pads after its first count; one starting 4 past an
-    8-boundary does not. Either way each double array lands 8-aligned. Effort is empty.
+    8-boundary does not. Either way each double array lands 8-aligned. Effort is empty,
+    and so are accelerations unless ``with_accelerations``.
     """
     doubles = ('<f8', (joint_count,))
     fields = [('positions_count', '<u4')]
@@ -44,10 +47,13 @@ def _point_dtype(joint_count: int, starts_on_eight: bool) -> np.dtype:
         fields.append(('positions_pad', '<u4'))
     fields += [('positions', *doubles),
                ('velocities_count', '<u4'), ('velocities_pad', '<u4'),
-               ('velocities', *doubles),
-               ('accelerations_count', '<u4'), ('accelerations_pad', '<u4'),
-               ('accelerations', *doubles),
-               ('effort_count', '<u4'), ('sec', '<i4'), ('nanosec', '<u4')]
+               ('velocities', *doubles)]
+    if with_accelerations:
+        fields += [('accelerations_count', '<u4'), ('accelerations_pad', '<u4'),
+                   ('accelerations', *doubles)]
+    else:
+        fields += [('accelerations_count', '<u4')]
+    fields += [('effort_count', '<u4'), ('sec', '<i4'), ('nanosec', '<u4')]
     return np.dtype(fields)
 
 
@@ -64,7 +70,7 @@ def joint_trajectory_cdr(
     time_from_start_ns: np.ndarray,
     positions: np.ndarray,
     velocities: np.ndarray,
-    accelerations: np.ndarray,
+    accelerations: np.ndarray | None,
     frame_id: str = '',
 ) -> bytes:
     """
@@ -74,7 +80,7 @@ def joint_trajectory_cdr(
     :param joint_names: the joint names, in column order.
     :param time_from_start_ns: each point's ``time_from_start`` in nanoseconds, ``(points,)``.
     :param positions: rad, ``(points, joints)``; likewise velocities (rad/s) and
-        accelerations (rad/s²). Effort is left empty.
+        accelerations (rad/s²; ``None``: left empty, as effort is).
     :param frame_id: ``header.frame_id``.
     """
     seconds, nanoseconds = divmod(int(stamp_ns), _NANOSECONDS_PER_SECOND)
@@ -89,18 +95,35 @@ def joint_trajectory_cdr(
     if point_count == 0:
         return _ENCAPSULATION + bytes(head)
     first_on_eight = len(head) % 8 == 0
-    first = np.zeros(1, _point_dtype(joint_count, first_on_eight))
-    rest = np.zeros(point_count - 1, _point_dtype(joint_count, False))
+    with_accelerations = accelerations is not None
+    first = np.zeros(1, _point_dtype(joint_count, first_on_eight, with_accelerations))
+    # Every later point starts where the first ended (each has a multiple of 8 bytes).
+    rest_on_eight = (len(head) + first.itemsize) % 8 == 0
+    rest = np.zeros(point_count - 1,
+                    _point_dtype(joint_count, rest_on_eight, with_accelerations))
     time_ns = np.asarray(time_from_start_ns, dtype=np.int64)
     if time_ns.min() < 0 or time_ns.max() >= 2**31 * _NANOSECONDS_PER_SECOND:
         raise ValueError('time_from_start must lie in [0, 2**31) s to fit a Duration message')
     for points, rows in ((first, slice(0, 1)), (rest, slice(1, None))):
         for field, values in (('positions', positions), ('velocities', velocities),
                               ('accelerations', accelerations)):
-            points[f'{field}_count'] = joint_count
-            points[field] = values[rows]
+            if values is not None:
+                points[f'{field}_count'] = joint_count
+                points[field] = values[rows]
         points['sec'], points['nanosec'] = np.divmod(time_ns[rows], _NANOSECONDS_PER_SECOND)
     return _ENCAPSULATION + bytes(head) + first.tobytes() + rest.tobytes()
+
+
+def float64_multi_array_cdr(data: np.ndarray) -> bytes:
+    """
+    Serialise a ``std_msgs/Float64MultiArray`` with an empty layout and ``data``.
+
+    Layout: ``layout.dim`` (uint32 count 0), ``layout.data_offset`` (uint32 0), ``data``
+    (uint32 count, 4 bytes of padding to the 8-aligned float64s).
+    """
+    values = np.asarray(data, dtype='<f8')
+    return b''.join((_ENCAPSULATION, b'\x00' * 8, len(values).to_bytes(4, 'little'),
+                     b'\x00' * 4, values.tobytes()))
 
 
 def joint_state_cdr(stamp_ns: int, names_cdr: bytes, position: np.ndarray,

@@ -1,0 +1,107 @@
+"""
+A stand-in robot for the tests: follows Float64MultiArray commands, publishes joint_states.
+
+Run as a subprocess (``python test/standin_robot.py --help``). Each joint follows the
+latest command with a first-order lag (time constant ``--tau`` s) and is published on
+``--states`` at ``--rate`` Hz, names in reverse order, after ``--extra`` joints. A
+message ``[index, offset]`` on ``--nudge`` moves joint ``index`` by ``offset`` rad and
+holds it there for ``--nudge-hold`` s ("by hand": the commands are ignored meanwhile);
+the first nudge also ends ``--omit`` (a joint left out of the messages until then).
+"""
+
+import argparse
+import math
+import sys
+import time
+
+import rclpy
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+
+
+def parse(argv):
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument('--joints', default='joint_1,joint_2,joint_3,joint_4,joint_5,joint_6')
+    parser.add_argument('--start', default='', help='start positions, comma separated (rad)')
+    parser.add_argument('--extra', default='', help='extra joint names listed first')
+    parser.add_argument('--frozen', default='', help='a joint that never follows')
+    parser.add_argument('--omit', default='',
+                        help='a joint left out of every message until the first nudge')
+    parser.add_argument('--stop-after', type=float, default=0.0, help='s; 0: never')
+    parser.add_argument('--reliability', default='reliable', choices=['reliable', 'best_effort'])
+    parser.add_argument('--tau', type=float, default=0.02, help='lag time constant, s')
+    parser.add_argument('--rate', type=float, default=100.0, help='Hz')
+    parser.add_argument('--commands', default='/robot/commands')
+    parser.add_argument('--states', default='/robot/joint_states')
+    parser.add_argument('--nudge', default='/robot/nudge')
+    parser.add_argument('--nudge-hold', type=float, default=1.0, help='s')
+    return parser.parse_args(argv)
+
+
+class StandInRobot(Node):
+    def __init__(self, args):
+        super().__init__('standin_robot')
+        self.args = args
+        self.names = args.joints.split(',')
+        self.position = [float(x) for x in args.start.split(',')] if args.start \
+            else [0.0] * len(self.names)
+        self.command = None
+        self.held_until = [0.0] * len(self.names)
+        self.began = time.monotonic()
+        self.omitting = bool(args.omit)
+        reliability = (ReliabilityPolicy.RELIABLE if args.reliability == 'reliable'
+                       else ReliabilityPolicy.BEST_EFFORT)
+        self.publisher = self.create_publisher(
+            JointState, args.states, QoSProfile(depth=10, reliability=reliability))
+        self.create_subscription(Float64MultiArray, args.commands, self.on_command, 10)
+        self.create_subscription(Float64MultiArray, args.nudge, self.on_nudge, 10)
+        self.period = 1.0 / args.rate
+        self.create_timer(self.period, self.step)
+
+    def on_command(self, message):
+        if len(message.data) == len(self.names):
+            self.command = list(message.data)
+
+    def on_nudge(self, message):
+        self.omitting = False
+        index, offset = int(message.data[0]), message.data[1]
+        self.position[index] += offset
+        self.held_until[index] = time.monotonic() + self.args.nudge_hold
+
+    def step(self):
+        now = time.monotonic()
+        if self.args.stop_after and now - self.began > self.args.stop_after:
+            return
+        gain = 1.0 - math.exp(-self.period / self.args.tau)
+        if self.command is not None:
+            for index, name in enumerate(self.names):
+                if name != self.args.frozen and now >= self.held_until[index]:
+                    self.position[index] += (self.command[index] - self.position[index]) * gain
+        names = [n for n in self.args.extra.split(',') if n] + self.names[::-1]
+        positions = [0.5] * (len(names) - len(self.names)) + self.position[::-1]
+        if self.omitting:
+            keep = [i for i, n in enumerate(names) if n != self.args.omit]
+            names, positions = [names[i] for i in keep], [positions[i] for i in keep]
+        message = JointState(name=names, position=positions)
+        message.header.stamp = self.get_clock().now().to_msg()
+        self.publisher.publish(message)
+
+
+def main(argv=None):
+    args = parse(argv)
+    rclpy.init()
+    node = StandInRobot(args)
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
