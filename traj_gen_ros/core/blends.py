@@ -15,8 +15,6 @@ duration exactly. That is the book's method, not an error.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from traj_gen_ros.core import validation
 from traj_gen_ros.core.exact import second_order
@@ -188,7 +186,7 @@ def lspb_via(
         minimum = _smallest_fitting_acceleration(path, durations, acceleration, start_velocity)
         raise JointError(f'lspb_via: {{joint}}: {reason} with acceleration '
                          f'{acceleration[joint]:g}; the smallest acceleration that fits is '
-                         f'{_round_up(minimum[joint])}', joint)
+                         f'{validation.round_up(minimum[joint], 4)}', joint)
     blend_times, velocities, _, _ = timing
     return _assemble(path, durations, blend_times, velocities, start_velocity, acceleration)
 
@@ -211,7 +209,7 @@ def _rest_start_blend_time(
         raise JointError(
             f'lspb: {{joint}}: acceleration {acceleration[joint]:g} is too low to move '
             f'{displacement[joint]:g} in {duration:g} s; eq. (6) needs at least '
-            f'{_round_up(minimum)}', joint)
+            f'{validation.round_up(minimum, 4)}', joint)
     return 2.0 * np.abs(displacement) / acceleration / (
         duration * (1.0 + np.sqrt(np.maximum(room, 0.0))))
 
@@ -379,11 +377,3 @@ def _assemble(
     coefficients[0::2, 1], coefficients[1::2, 1] = incoming, velocities
     coefficients[0::2, 2] = 0.5 * blend_accelerations
     return BlendedTrajectory(starts, coefficients)
-
-
-def _round_up(value: float, digits: int = 4) -> str:
-    """``value`` rounded up to ``digits`` significant digits, so the printed number works."""
-    if value <= 0.0 or not math.isfinite(value):
-        return f'{value:g}'
-    step = 10.0 ** (math.floor(math.log10(value)) - digits + 1)
-    return f'{math.ceil(value / step - 1e-9) * step:.{digits}g}'

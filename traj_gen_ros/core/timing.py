@@ -27,7 +27,10 @@ import numpy as np
 from traj_gen_ros.core import validation
 from traj_gen_ros.core.blends import lspb_via, three_pieces
 from traj_gen_ros.core.exact import second_order
-from traj_gen_ros.core.exact.polynomial_durations import minimum_duration, SHORTEST_POLYNOMIAL
+from traj_gen_ros.core.exact.polynomial_durations import (
+    polynomial_minimum_duration,
+    SHORTEST_POLYNOMIAL,
+)
 from traj_gen_ros.core.jerk_limited.move import scurve_min_time
 from traj_gen_ros.core.jerk_limited.path import scurve_via_durations
 from traj_gen_ros.core.kinematic_limits import JointError, within_limits
@@ -331,7 +334,7 @@ def _moving_min_time(
     else:
         start_acceleration = magnitude = np.zeros_like(start_velocity)
     # Start terms far below their limits (1e-12) only blur the candidate polynomials' degree.
-    duration, hopeless = minimum_duration(
+    duration, hopeless = polynomial_minimum_duration(
         profile, goal - start,
         start_velocity * (speed >= 1e-12 * max_velocity),
         start_acceleration * (magnitude >= 1e-12 * max_acceleration),

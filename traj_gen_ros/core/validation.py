@@ -8,6 +8,8 @@ where (which argument, joint or point) and what would be valid.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from decimal import Decimal
+import math
 
 import numpy as np
 
@@ -22,6 +24,27 @@ def every(mask: np.ndarray) -> bool:
     joints of a plan it is several times faster, and a node may plan at kHz rates.
     """
     return np.count_nonzero(mask) == mask.size
+
+
+def round_up(value: float, digits: int) -> str:
+    """
+    Print ``value`` rounded up to ``digits`` significant digits, so the printed number works.
+
+    A limit named in a refusal (a minimum duration, s) is printed rounded *up*: passing
+    the printed number back is then never too short. Values that are not finite and > 0
+    are printed as they are; a value whose rounding up passes the largest float is
+    printed exactly (``1.798e+308``) rather than as ``inf``.
+    """
+    if not math.isfinite(value) or value <= 0.0:
+        return f'{value:g}'
+    exponent = math.floor(math.log10(value)) - digits + 1
+    step = 10.0 ** exponent
+    # (1 - 1e-15): a value that is already a round number is not pushed up by its rounding.
+    mantissa = math.ceil(value / step * (1.0 - 1e-15))
+    rounded = mantissa * step
+    if math.isfinite(rounded):
+        return f'{rounded:.{digits}g}'
+    return format(Decimal(mantissa).scaleb(exponent), f'.{digits}g')
 
 
 def _describe_bad(values: np.ndarray, item: str = 'joint') -> str:

@@ -25,42 +25,24 @@ import numpy as np
 import ruckig
 from traj_gen_ros.core import validation
 from traj_gen_ros.core.jerk_limited import fallback as scurve_fallback
+from traj_gen_ros.core.jerk_limited.problem import (
+    DURATION_TOLERANCE,
+    Floats,
+    LIMIT_NAMES,
+    Move,
+)
 from traj_gen_ros.core.trajectory import JerkLimitedTrajectory, Trajectory
 
 PHASES = 7  # jerk phases of one S-curve; braking adds two before them
-DURATION_TOLERANCE = 1e-13  # relative: a plan this close to the asked duration meets it
 _GOOD = (ruckig.Result.Working, ruckig.Result.Finished)
 _LIMIT_TOLERANCE = 1e-10  # relative: a Ruckig phase beyond a limit by more is refused
 _CHECKED_BELOW = 1e-2  # plans are checked against limits this small (in Ruckig's units)
 _SMALLEST_RATIO = 2.0**-20  # lowered limits stay above this fraction (cubed for jerk)
-LIMIT_NAMES = ('max_velocity', 'max_acceleration', 'max_jerk')
-
-Floats = list[float]
 
 
-class Move:
-    """One state-to-state problem as Python floats, one list entry per joint."""
-
-    __slots__ = ('start', 'goal', 'v0', 'a0', 'vf', 'limits', 'duration')
-
-    def __init__(self, start: Floats, goal: Floats, v0: Floats, a0: Floats, vf: Floats,
-                 limits: tuple[Floats, Floats, Floats], duration: float | None) -> None:
-        self.start, self.goal, self.v0, self.a0, self.vf = start, goal, v0, a0, vf
-        self.limits = limits  # (v_max, a_max, j_max)
-        self.duration = duration  # the exact duration asked for, or None for minimum time
-
-    def joint(self, index: int) -> Move:
-        """Return the same problem for one joint alone."""
-        pick = slice(index, index + 1)
-        return Move(self.start[pick], self.goal[pick], self.v0[pick], self.a0[pick],
-                    self.vf[pick], tuple(limit[pick] for limit in self.limits),
-                    self.duration)
-
-
-def minimum_duration(move: Move) -> float:
+def scurve_minimum_duration(move: Move) -> float:
     """Return the time-optimal synchronised duration (s) of ``move``, ignoring its own."""
-    return plan_move(Move(move.start, move.goal, move.v0, move.a0, move.vf, move.limits,
-                          None))[1]
+    return plan_move(move.minimum_time())[1]
 
 
 def plan_move(move: Move) -> tuple[Trajectory, float]:
@@ -116,9 +98,10 @@ def _stretched(move: Move) -> Iterator[tuple[Move, float]]:
     if it keeps ``T``.
     """
     if move.duration is None and len(move.start) == 1:
-        return  # nothing to stretch (and this is what minimum_duration below calls)
+        return  # nothing to stretch (what scurve_minimum_duration's own calls are)
     try:
-        own = [minimum_duration(move.joint(joint)) for joint in range(len(move.start))]
+        own = [scurve_minimum_duration(move.joint(joint))
+               for joint in range(len(move.start))]
     except ValueError:
         return
     duration = move.duration or max(own)
@@ -319,8 +302,9 @@ def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Fl
         breakpoints = np.empty((len(table) + 1, len(profiles)))
         breakpoints[0] = 0.0
         np.minimum(np.cumsum(table[:, 4], axis=0), duration, out=breakpoints[1:])
-    else:  # scaled units: the products may overflow, then the plan is refused below
-        with np.errstate(over='ignore', invalid='ignore'):
+    else:  # scaled units: the products may overflow (or k³ underflow to 0), then the
+        # plan is refused below
+        with np.errstate(over='ignore', divide='ignore', invalid='ignore'):
             divisors = np.array([[1.0], [k], [2.0 * k * k], [6.0 * k * k * k]])
             table[:, :4] *= np.array(scales) / divisors
             table[:, 0] += shifts
