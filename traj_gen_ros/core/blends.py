@@ -74,7 +74,7 @@ def lspb(
     """
     rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0)
     duration = validation.duration_of(duration)
-    acceleration = validation.positive_per_joint('acceleration', acceleration, rows.shape[1])
+    acceleration = validation.per_joint('acceleration', acceleration, rows.shape[1])
     with np.errstate(over='ignore', under='ignore', divide='ignore', invalid='ignore'):
         plan = single_segment(rows[0], rows[1], np.float64(duration), acceleration, rows[2])
     if not (np.isfinite(plan.breakpoints).all() and np.isfinite(plan.coefficients).all()):
@@ -175,7 +175,7 @@ def lspb_via(
     """
     path = validation.path_points(points)
     durations = validation.segment_durations(durations, len(path) - 1)
-    acceleration = validation.positive_per_joint('acceleration', acceleration, path.shape[1])
+    acceleration = validation.per_joint('acceleration', acceleration, path.shape[1])
     start_velocity = validation.per_joint_rows(v0=v0, like=path[0])[0]
     if len(path) == 2:
         return single_segment(path[0], path[1], durations[0], acceleration, start_velocity)

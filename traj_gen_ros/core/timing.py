@@ -275,8 +275,8 @@ def via_durations(
     """
     path = validation.path_points(points)
     joint_count = path.shape[1]
-    max_velocity = validation.positive_per_joint('max_velocity', max_velocity, joint_count)
-    max_acceleration = validation.positive_per_joint(
+    max_velocity = validation.per_joint('max_velocity', max_velocity, joint_count)
+    max_acceleration = validation.per_joint(
         'max_acceleration', max_acceleration, joint_count)
     check_profile(profile)
     if profile == 'scurve':
@@ -287,7 +287,7 @@ def via_durations(
     if velocities not in ('heuristic', 'continuous'):
         raise ValueError(f'velocities must be "heuristic" or "continuous", got "{velocities}"')
     blend_acceleration = max_acceleration if acceleration is None else (
-        validation.positive_per_joint('acceleration', acceleration, joint_count))
+        validation.per_joint('acceleration', acceleration, joint_count))
     steps = np.abs(np.diff(path, axis=0))
     base = rest_to_rest_times(steps, max_velocity, max_acceleration, profile).max(axis=1)
     if np.max(steps) <= 1e-12 * max(1.0, float(np.max(np.abs(path)))):

@@ -10,6 +10,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from decimal import Decimal
 import math
+import sys
+from typing import Literal
 
 import numpy as np
 
@@ -37,14 +39,14 @@ def round_up(value: float, digits: int) -> str:
     """
     if not math.isfinite(value) or value <= 0.0:
         return f'{value:g}'
-    exponent = math.floor(math.log10(value)) - digits + 1
-    step = 10.0 ** exponent
+    exact = Decimal(value)  # the float's exact value: no overflow, no underflow
+    exponent = exact.adjusted() - digits + 1
     # (1 - 1e-15): a value that is already a round number is not pushed up by its rounding.
-    mantissa = math.ceil(value / step * (1.0 - 1e-15))
-    rounded = mantissa * step
-    if math.isfinite(rounded):
-        return f'{rounded:.{digits}g}'
-    return format(Decimal(mantissa).scaleb(exponent), f'.{digits}g')
+    mantissa = math.ceil(exact.scaleb(-exponent) * (1 - Decimal('1e-15')))
+    rounded = Decimal(mantissa).scaleb(exponent)
+    if rounded <= Decimal(sys.float_info.max):
+        return f'{float(rounded):.{digits}g}'
+    return format(rounded, f'.{digits}g')
 
 
 def _describe_bad(values: np.ndarray, item: str = 'joint') -> str:
@@ -103,25 +105,60 @@ def duration_of(value: float, name: str = 'duration') -> float:
     return float(array)
 
 
-def positive_per_joint(name: str, value: ArrayLike, joint_count: int) -> np.ndarray:
-    """Return a per-joint limit (one for all, or one per joint), finite and > 0: ``(joints,)``."""
-    if isinstance(value, int | float):
-        if not 0.0 < value < np.inf:
-            raise ValueError(f'{name} must be finite and > 0, got {value}')
-        return np.full(joint_count, float(value))
-    try:
-        array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f'{name} must be numbers: {error}') from None
-    if array.ndim == 0:
-        return positive_per_joint(name, float(array), joint_count)
-    if array.shape != (joint_count,):
-        raise ValueError(f'{name} is shaped {array.shape} for {joint_count} joints; '
-                         'give one value, or one per joint')
-    valid = (array > 0.0) & (array < np.inf)
+Sign = Literal['positive', 'non-negative', 'any']
+_VALID = {('positive', False): 'finite and > 0', ('non-negative', False): 'finite and >= 0',
+          ('any', False): 'finite', ('positive', True): '> 0 (inf: no limit)',
+          ('non-negative', True): '>= 0 (inf: no limit)',
+          ('any', True): 'a number, not NaN (+-inf: no limit)'}
+
+
+def per_joint(name: str, value: object, joint_count: int, sign: Sign = 'positive',
+              infinite: bool = False) -> np.ndarray:
+    """
+    Return a per-joint value given as one number for all joints or one per joint.
+
+    The one broadcaster of the package: the core's limits, the node's parameters, the
+    URDF merge and the command line's options all go through it.
+
+    :param name: the argument or parameter, named in the error message.
+    :param value: a number, or a sequence of one or ``joint_count`` numbers.
+    :param joint_count: how many joints.
+    :param sign: ``'positive'`` (> 0), ``'non-negative'`` (>= 0) or ``'any'``.
+    :param infinite: whether ±inf is allowed (meaning: no limit); NaN never is.
+    :return: ``(joint_count,)`` floats, in the unit of ``value``.
+    :raises ValueError: naming ``name`` and what is valid: not numbers, a count that is
+        neither 1 nor ``joint_count``, or a value out of range (naming the first joint).
+    """
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        array = np.full(joint_count, float(value))
+    else:
+        if isinstance(value, bool | str) or value is None:
+            raise ValueError(f'{name} must be a number or one number per joint, got {value!r}')
+        try:
+            array = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f'{name} must be a number or one number per joint, '
+                             f'got {value!r}') from None
+        if array.ndim > 1:
+            raise ValueError(f'{name} must be a number or one number per joint, '
+                             f'got shape {array.shape}')
+        if array.size == 1:
+            array = np.full(joint_count, float(array.reshape(-1)[0]))
+        elif array.size != joint_count:
+            raise ValueError(f'{name} has {array.size} values but there are {joint_count} '
+                             'joints: give one value for all joints or one per joint')
+    if sign == 'positive':
+        valid = array > 0.0
+    elif sign == 'non-negative':
+        valid = array >= 0.0
+    else:
+        valid = ~np.isnan(array)
+    if not infinite:
+        valid &= np.isfinite(array)
     if not every(valid):
         joint = int(np.argmin(valid))
-        raise ValueError(f'{name} must be finite and > 0; joint {joint} has {array[joint]}')
+        raise ValueError(f'{name} must be {_VALID[sign, infinite]}; joint {joint} has '
+                         f'{array[joint]}')
     return array
 
 

@@ -27,6 +27,7 @@ import threading
 
 from lxml import etree
 import numpy as np
+from traj_gen_ros.core.validation import per_joint
 from urdf_parser_py import xml_reflection
 from urdf_parser_py.urdf import URDF as UrdfRobot  # noqa: N811 (a class)
 from urdf_parser_py.xml_reflection import core as xml_core
@@ -212,18 +213,6 @@ def _joint_bounds(joint: object) -> tuple[float, float, float]:
     return lower, upper, values['velocity']
 
 
-def _per_joint(values: float | Sequence[float], name: str, count: int) -> np.ndarray:
-    array = np.asarray(values, dtype=float)
-    if array.ndim == 0:
-        array = np.full(count, float(array))
-    if array.shape != (count,):
-        raise ValueError(f'{name} has {array.size} values but there are {count} joints: give '
-                         'one value for all joints or one per joint')
-    if np.isnan(array).any():
-        raise ValueError(f'{name} must not be NaN')
-    return array
-
-
 def merge_limits(urdf: UrdfLimits, *, min_position: float | Sequence[float] = -math.inf,
                  max_position: float | Sequence[float] = math.inf,
                  max_velocity: float | Sequence[float] = math.inf) -> JointLimits:
@@ -239,14 +228,12 @@ def merge_limits(urdf: UrdfLimits, *, min_position: float | Sequence[float] = -m
         -inf, ``max_velocity <= 0``, or a joint whose merged range is empty.
     """
     count = len(urdf.joints)
-    parameter_lower = _per_joint(min_position, 'min_position', count)
-    parameter_upper = _per_joint(max_position, 'max_position', count)
-    parameter_velocity = _per_joint(max_velocity, 'max_velocity', count)
+    parameter_lower = per_joint('min_position', min_position, count, 'any', infinite=True)
+    parameter_upper = per_joint('max_position', max_position, count, 'any', infinite=True)
+    parameter_velocity = per_joint('max_velocity', max_velocity, count, infinite=True)
     if (parameter_lower == math.inf).any() or (parameter_upper == -math.inf).any():
         raise ValueError('min_position cannot be +inf nor max_position -inf (use -inf and '
                          '+inf respectively for no limit)')
-    if (parameter_velocity <= 0).any():
-        raise ValueError('max_velocity must be > 0 (inf: no limit)')
 
     lower = np.maximum(urdf.lower, parameter_lower)
     upper = np.minimum(urdf.upper, parameter_upper)

@@ -205,7 +205,7 @@ def _validated(points: ArrayLike, durations: ArrayLike, max_velocity: ArrayLike,
     path = validation.path_points(points)
     durations = validation.segment_durations(durations, len(path) - 1)
     joints = path.shape[1]
-    limits = tuple(validation.positive_per_joint(name, value, joints) for name, value in
+    limits = tuple(validation.per_joint(name, value, joints) for name, value in
                    zip(LIMIT_NAMES, (max_velocity, max_acceleration, max_jerk), strict=True))
     if isinstance(velocities, str):
         if velocities != 'heuristic':
