@@ -120,7 +120,7 @@ def single_segment(
 def three_pieces(
     start: np.ndarray,
     goal: np.ndarray,
-    duration: float,
+    duration: float | np.ndarray,
     blend_times: tuple[np.ndarray, np.ndarray],
     blend_moves: tuple[np.ndarray, np.ndarray],
     cruise: np.ndarray,
@@ -129,6 +129,8 @@ def three_pieces(
 ) -> BlendedTrajectory:
     """
     Assemble blend, line, blend from their timing, all ``(joints,)`` arrays.
+
+    ``duration`` (s) is the end of the last blend: one for all joints, or one per joint.
 
     The first blend takes ``start_velocity`` to ``cruise`` in ``blend_times[0]`` covering
     ``blend_moves[0]``; the last takes ``cruise`` to rest in ``blend_times[1]`` covering

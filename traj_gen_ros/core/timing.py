@@ -382,20 +382,22 @@ def _moving_lspb(
     moves = (0.5 * (velocity + cruise) * first, 0.5 * cruise * last)
     accelerations = (np.sign(cruise - velocity) * max_acceleration,
                      -np.sign(cruise) * max_acceleration)
-    blended = three_pieces(start + brake_move, goal, duration, (first, last), moves, cruise,
+    # Blend, line, blend fill the time after each joint's brake (``remaining``, per joint).
+    blended = three_pieces(start + brake_move, goal, remaining, (first, last), moves, cruise,
                            velocity, accelerations)
     if not np.count_nonzero(brake_time):
         return blended
-    return _with_brake(start, start_velocity, brake_time, max_acceleration, blended)
+    return _with_brake(start, start_velocity, brake_time, max_acceleration, blended, duration)
 
 
 def _with_brake(start: np.ndarray, start_velocity: np.ndarray, brake_time: np.ndarray,
-                max_acceleration: np.ndarray, blended: Trajectory) -> Trajectory:
+                max_acceleration: np.ndarray, blended: Trajectory,
+                duration: float) -> Trajectory:
     """Prepend the brake piece to blend, line, blend shifted by ``brake_time``."""
     breakpoints = np.empty((5, start.size))
     breakpoints[0] = 0.0
     breakpoints[1:] = brake_time + blended.breakpoints
-    breakpoints[-1] = blended.duration
+    breakpoints[-1] = duration
     coefficients = np.zeros((4, 3, start.size))
     coefficients[0, 0], coefficients[0, 1] = start, start_velocity
     coefficients[0, 2] = -0.5 * np.sign(start_velocity) * max_acceleration * (brake_time > 0)

@@ -39,11 +39,10 @@ from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.config import Config
 from traj_gen_ros.node.parsing import GoalRequest, MAX_DURATION, RequestError, ViaRequest
 from traj_gen_ros.node.position_checks import check_plan, check_request
+from traj_gen_ros.node.urdf_limits import START_TOLERANCE
 
 #: Profiles whose minimum-time goals the core checks exactly itself (see the module doc).
 EXACTLY_TIMED = ('cubic', 'quintic')
-#: A first via point at ``time_from_start`` 0 must match the setpoint this closely (rad).
-START_TOLERANCE = 1e-6
 #: Most samples one plan may have on ``~/trajectory`` (duration x rate_hz + 2).
 MAX_TRAJECTORY_POINTS = 200_000
 

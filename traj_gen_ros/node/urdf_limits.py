@@ -40,6 +40,12 @@ _MOVABLE = ('revolute', 'continuous', 'prismatic')
 _SOURCE_TEXT = {URDF: 'URDF', NONE: 'none'}
 _PARAMETER_NAME = {'lower': 'min_position', 'upper': 'max_position',
                    'velocity': 'max_velocity'}
+#: A commanded position this close to the current one (rad or m) counts as it: it may stay
+#: outside the range (:func:`check_positions`), and a first via point at time 0 stands for
+#: the start (:mod:`traj_gen_ros.node.planning`).
+START_TOLERANCE = 1e-6
+#: Slack on a position bound (relative to ``max(1, |bound|)``): rounding, not an excess.
+POSITION_TOLERANCE = 1e-9
 _XML_DECLARATION = re.compile(r'^\s*<\?xml[^>]*\?>')
 _PARSER_LOCK = threading.Lock()  # urdf_parser_py reports warnings through a module global
 
@@ -309,39 +315,67 @@ def describe_sources(limits: JointLimits) -> str:
     return '; '.join(parts)
 
 
-def check_positions(names: Sequence[str], positions: Sequence[float], limits: JointLimits,
-                    what: str = 'goal position') -> str | None:
+def describe_range(limits: JointLimits, index: int) -> str:
+    """
+    Say a joint's position range and where each bound came from.
+
+    E.g. ``[-2.9, 2.9] rad (lower from URDF; upper from parameter max_position)``.
+    """
+    position, unit = limits.position, limits.units[index]
+    origins = '; '.join(
+        f'{bound} from {_describe_origin(sources[index], bound)}'
+        for bound, sources in (('lower', position.lower_source),
+                               ('upper', position.upper_source)))
+    return f'[{position.lower[index]:.6g}, {position.upper[index]:.6g}] {unit} ({origins})'
+
+
+def check_positions(names: Sequence[str], positions: Sequence[float] | np.ndarray,
+                    limits: JointLimits, what: str = 'goal position',
+                    start: Sequence[float] | np.ndarray | None = None) -> str | None:
     """
     Check positions of named joints against their position limits.
 
+    The one position check: the node refuses a goal or via point with it
+    (:func:`traj_gen_ros.node.position_checks.check_request`). A position may exceed a
+    bound by :data:`POSITION_TOLERANCE` (relative to ``max(1, |bound|)``: rounding).
+
     :param names: joint names, any subset of ``limits.joints`` in any order.
-    :param positions: one position per name, rad or m.
+    :param positions: one position per name, rad or m; or rows of them, ``(points, names)``.
     :param limits: the limits in force (:func:`merge_limits`).
-    :param what: what the positions are, for the sentence (e.g. ``'via point 2 position'``).
+    :param what: what the positions are, for the sentence (e.g. ``'via point 2 position'``);
+        ``{point}`` in it is replaced by the row of a 2-D ``positions``.
+    :param start: each named joint's current position (rad or m), or ``None``: a position
+        within :data:`START_TOLERANCE` of it passes even outside the range (a joint
+        already outside may stay where it is).
     :return: ``None`` when every position is within its range (bounds included); otherwise
-        one sentence for the first offending joint, naming it, the value, the valid range
-        and where the broken bound came from, e.g. ``goal position 3.2 rad for joint
-        'joint_2' is outside its range [-2.9, 2.9] rad (upper from URDF)``.
+        one sentence for the first offending point and, in it, the first offending joint,
+        naming it, the value, the valid range and where each bound came from, e.g. ``goal
+        position 3.2 rad for joint 'joint_2' is outside its range [-2.9, 2.9] rad (lower
+        from URDF; upper from URDF)``.
     :raises ValueError: ``names`` and ``positions`` differ in length.
     """
-    if len(names) != len(positions):
-        raise ValueError(f'{len(names)} names but {len(positions)} positions')
+    rows = np.asarray(positions, dtype=float)
+    rows = rows.reshape(1, -1) if rows.ndim < 2 else rows
+    if rows.shape[1] != len(names):
+        raise ValueError(f'{len(names)} names but {rows.shape[1]} positions')
     index_of = {name: index for index, name in enumerate(limits.joints)}
-    position = limits.position
-    for name, value in zip(names, positions, strict=True):
-        index = index_of.get(name)
-        if index is None:
-            return (f"{what} names joint '{name}', which has no limits; known joints: "
-                    f'{list(limits.joints)}')
-        unit = limits.units[index]
-        value = float(value)
-        if not math.isfinite(value):
-            return f"{what} {value:g} {unit} for joint '{name}' is not finite"
-        lower, upper = position.lower[index], position.upper[index]
-        if lower <= value <= upper:
-            continue
-        bound = 'lower' if value < lower else 'upper'
-        source = (position.lower_source if bound == 'lower' else position.upper_source)[index]
-        return (f"{what} {value:g} {unit} for joint '{name}' is outside its range "
-                f'[{lower:g}, {upper:g}] {unit} ({bound} from {_describe_origin(source, bound)})')
-    return None
+    for name in names:
+        if name not in index_of:
+            return (f"{what.format(point=0)} names joint '{name}', which has no limits; "
+                    f'known joints: {list(limits.joints)}')
+    indices = np.array([index_of[name] for name in names], dtype=int)
+    lower, upper = limits.position.lower[indices], limits.position.upper[indices]
+    finite = np.isfinite(rows)
+    outside = ~finite | (rows < lower - POSITION_TOLERANCE * np.maximum(1.0, np.abs(lower))) \
+        | (rows > upper + POSITION_TOLERANCE * np.maximum(1.0, np.abs(upper)))
+    if start is not None:
+        outside &= ~finite | (np.abs(rows - np.asarray(start, dtype=float)) > START_TOLERANCE)
+    if not outside.any():
+        return None
+    point, column = (int(i) for i in np.argwhere(outside)[0])  # first point, first joint
+    index, value, label = indices[column], rows[point, column], what.format(point=point)
+    unit = limits.units[index]
+    if not finite[point, column]:
+        return f"{label} {value:g} {unit} for joint '{names[column]}' is not finite"
+    return (f"{label} {value:.6g} {unit} for joint '{names[column]}' is outside its range "
+            f'{describe_range(limits, index)}')
