@@ -51,6 +51,7 @@ class BlendedTrajectory(Trajectory):
         return self.coefficients[1::2, 1]
 
 
+@validation.refuses_overflow('lspb')
 def lspb(
     q0: ArrayLike,
     qf: ArrayLike,
@@ -149,6 +150,7 @@ def three_pieces(
     return BlendedTrajectory(breakpoints, coefficients)
 
 
+@validation.refuses_overflow('lspb_via')
 def lspb_via(
     points: ArrayLike,
     durations: ArrayLike,
@@ -207,13 +209,14 @@ def _rest_start_blend_time(
     too_low = room < -_FEASIBILITY_TOLERANCE
     if np.count_nonzero(too_low):
         joint = int(np.argmax(too_low))
-        minimum = 4.0 * abs(displacement[joint]) / duration**2
+        minimum = 4.0 * abs(displacement[joint]) / duration / duration
         raise JointError(
             f'lspb: {{joint}}: acceleration {acceleration[joint]:g} is too low to move '
             f'{displacement[joint]:g} in {duration:g} s; eq. (6) needs at least '
             f'{validation.round_up(minimum, 4)}', joint)
-    return 2.0 * np.abs(displacement) / acceleration / (
-        duration * (1.0 + np.sqrt(np.maximum(room, 0.0))))
+    # (T (1 + √room) would overflow for T near the largest float: divide by T first.)
+    return np.abs(displacement) / acceleration / duration * (
+        2.0 / (1.0 + np.sqrt(np.maximum(room, 0.0))))
 
 
 def _via_timing(

@@ -24,6 +24,7 @@ from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.core.validation import ArrayLike
 
 
+@validation.refuses_overflow('plan_path')
 def plan_path(
     points: ArrayLike,
     durations: ArrayLike | None,

@@ -14,6 +14,7 @@ from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.core.validation import ArrayLike
 
 
+@validation.refuses_overflow('brake')
 def brake(q0: ArrayLike, v0: ArrayLike, max_acceleration: ArrayLike) -> Trajectory:
     """
     Stop every joint as fast as its ``max_acceleration`` allows, then hold.

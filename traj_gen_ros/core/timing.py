@@ -50,6 +50,7 @@ def check_profile(profile: str) -> None:
         raise ValueError(f'profile must be one of {", ".join(PROFILES)}, got "{profile}"')
 
 
+@validation.refuses_overflow('min_time')
 def min_time(
     q0: ArrayLike,
     qf: ArrayLike,
@@ -206,6 +207,7 @@ def rest_to_rest_times(
                       np.sqrt(acceleration_peak * distance / max_acceleration))
 
 
+@validation.refuses_overflow('hold')
 def hold(positions: ArrayLike) -> Trajectory:
     """Return a zero-duration trajectory that holds ``positions`` (rad) at rest."""
     positions = validation.per_joint_rows(positions=positions)[0]
@@ -253,6 +255,7 @@ def shortest_duration(
     return best
 
 
+@validation.refuses_overflow('via_durations')
 def via_durations(
     points: ArrayLike,
     max_velocity: ArrayLike,

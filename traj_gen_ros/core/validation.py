@@ -7,15 +7,42 @@ where (which argument, joint or point) and what would be valid.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from decimal import Decimal
+import functools
 import math
 import sys
-from typing import Literal
+from typing import Literal, TypeVar
 
 import numpy as np
 
 ArrayLike = float | Sequence[float] | np.ndarray
+Planner = TypeVar('Planner', bound=Callable)
+
+
+def refuses_overflow(caller: str) -> Callable[[Planner], Planner]:
+    """
+    Make a public planner refuse inputs whose arithmetic leaves float64, never return junk.
+
+    The planner runs with numpy's overflow, division by zero and invalid results raised
+    (code that expects them says so with its own ``np.errstate``); one of them, or a
+    Python ``OverflowError``, becomes a ``ValueError`` naming ``caller`` and why. Extreme
+    magnitudes (positions or durations near 1e308, limits near 1e-308) are then refused
+    instead of giving a plan that is silently wrong.
+    """
+    def decorate(planner: Planner) -> Planner:
+        @functools.wraps(planner)
+        def guarded(*args: object, **kwargs: object) -> object:
+            try:
+                with np.errstate(over='raise', divide='raise', invalid='raise'):
+                    return planner(*args, **kwargs)
+            except (FloatingPointError, OverflowError) as error:
+                raise ValueError(
+                    f'{caller}: the inputs leave the range of float64 ({error}); use '
+                    'smaller positions and velocities, or durations and limits closer to '
+                    'each other') from None
+        return guarded  # type: ignore[return-value]
+    return decorate
 
 
 def every(mask: np.ndarray) -> bool:

@@ -62,6 +62,7 @@ def scurve_min_time(
     return plan_move(move)[0]
 
 
+@validation.refuses_overflow('scurve')
 def scurve(
     q0: ArrayLike,
     qf: ArrayLike,

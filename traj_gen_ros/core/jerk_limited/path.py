@@ -41,6 +41,7 @@ class Start(NamedTuple):
 REST = Start(0.0, 0.0)
 
 
+@validation.refuses_overflow('scurve_via')
 def scurve_via(
     points: ArrayLike,
     durations: ArrayLike,

@@ -60,7 +60,7 @@ def plan_move(move: Move) -> tuple[Trajectory, float]:
         elif needed is None or solved[1] <= needed * (1.0 + DURATION_TOLERANCE):
             return solved
     fallback = scurve_fallback.rest_to_rest(move) or scurve_fallback.composed(move, plan_move)
-    if fallback is not None:
+    if fallback is not None and _arrives(fallback[0], move):  # (a stretch may underflow)
         return fallback
     raise ValueError(_failure_message(move, reason))
 
@@ -239,7 +239,7 @@ def _calculate(move: Move, time_scale: float,
     built = _build(solution.profiles[0], duration, k, scales, shifts, move, limits)
     if isinstance(built, str):
         return built
-    if position_scales is not None and max(scales) > 1.0 and not _arrives(built, move):
+    if not _arrives(built, move):  # (in extreme units Ruckig may miss the goal)
         return 'Ruckig is not precise enough in these units'
     return built, duration
 
@@ -249,8 +249,10 @@ def _arrives(trajectory: Trajectory, move: Move) -> bool:
     Tell whether a plan ends at the goal state as precisely as Ruckig does unscaled.
 
     Ruckig's precision is absolute (1e-8 in position and velocity); scaling positions by
-    ``s`` widens it by ``s``, so such a plan is kept only if it still arrives within
-    ``1e-8`` plus ``1e-9`` of the positions' or the limit's magnitude.
+    ``s`` widens it by ``s``, so a plan is kept only if it still arrives within ``1e-8``
+    plus ``1e-9`` of the positions' or the limit's magnitude (for the velocity, plus what
+    the resolution of its times allows: ``a_max · 4 ε · T``). Every plan is checked: in
+    extreme units a plan can miss its goal (a time-stretch whose coefficients vanish).
     """
     c0, c1, c2, c3 = trajectory.coefficients[-1]  # each joint's last piece, at its end
     with np.errstate(over='ignore', invalid='ignore'):  # scaled back: inf or NaN fails
@@ -258,9 +260,11 @@ def _arrives(trajectory: Trajectory, move: Move) -> bool:
         position = ((c3 * length + c2) * length + c1) * length + c0
         velocity = (3.0 * c3 * length + 2.0 * c2) * length + c1
         reach = np.maximum(np.maximum(np.abs(move.start), np.abs(move.goal)), 1.0)
+        resolution = 4.0 * np.finfo(float).eps * trajectory.duration
         return (validation.every(np.abs(position - move.goal) <= 1e-8 + 1e-9 * reach)
                 and validation.every(np.abs(velocity - move.vf)
-                                     <= 1e-8 + 1e-9 * np.asarray(move.limits[0])))
+                                     <= 1e-8 + 1e-9 * np.asarray(move.limits[0])
+                                     + np.asarray(move.limits[1]) * resolution))
 
 
 def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Floats,
