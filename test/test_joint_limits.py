@@ -235,10 +235,12 @@ def test_defaults_keep_the_urdf_and_no_urdf_leaves_the_parameters(arm_limits):
 @pytest.mark.parametrize('parameters, message', [
     ({'max_velocity': [1.0, 2.0]},
      r'^max_velocity has 2 values but there are 3 joints: give one value for all joints or '),
-    ({'min_position': [0.0, math.nan, 0.0]}, r'^min_position must not be NaN$'),
+    ({'min_position': [0.0, math.nan, 0.0]},
+     r'^min_position must be a number, not NaN \(\+-inf: no limit\); joint 1 has nan$'),
     ({'min_position': INF}, r'^min_position cannot be \+inf nor max_position -inf'),
     ({'max_position': -INF}, r'^min_position cannot be \+inf nor max_position -inf'),
-    ({'max_velocity': [1.0, 0.0, 1.0]}, r'^max_velocity must be > 0 \(inf: no limit\)$'),
+    ({'max_velocity': [1.0, 0.0, 1.0]},
+     r'^max_velocity must be > 0 \(inf: no limit\); joint 1 has 0.0$'),
     ({'min_position': [3.0, 0.0, 0.0]},
      r"^joint 'joint_1' has no valid position: the URDF allows \[-2.9, 2.9\] rad and the "
      r'parameters \[3, inf\] rad$'),
@@ -284,11 +286,11 @@ def test_positions_within_range_bounds_included_pass(merged):
 def test_refusal_names_joint_value_range_and_source(merged):
     assert jl.check_positions(['joint_1'], [3.2], merged) == (
         "goal position 3.2 rad for joint 'joint_1' is outside its range [-2.9, 2.9] rad "
-        '(upper from URDF)')
+        '(lower from URDF; upper from URDF)')
     assert jl.check_positions(['joint_1', 'joint_3'], [0.0, 0.05], merged,
                               what='via point 2 position') == (
         "via point 2 position 0.05 m for joint 'joint_3' is outside its range [0.1, 0.5] m "
-        '(lower from parameter min_position)')
+        '(lower from parameter min_position; upper from URDF)')
     # The first offending joint in the caller's order is named.
     assert "joint 'joint_3'" in jl.check_positions(['joint_3', 'joint_1'], [0.7, 5.0], merged)
 
@@ -305,6 +307,15 @@ def test_non_finite_and_unknown_joints_are_refused(merged):
 
 def test_positions_given_as_numpy_array(merged):
     assert jl.check_positions(JOINTS, np.array([0.0, 0.0, 0.2]), merged) is None
+    # Rows of positions (via points): the first offending point is named.
+    assert jl.check_positions(['joint_1'], [[0.0], [1.0], [3.0]], merged,
+                              what='via point {point} position') == (
+        "via point 2 position 3 rad for joint 'joint_1' is outside its range [-2.9, 2.9] rad "
+        '(lower from URDF; upper from URDF)')
+    # Rounding beyond a bound passes; so does a joint already outside that stays there.
+    assert jl.check_positions(['joint_1'], [2.9 + 1e-12], merged) is None
+    assert jl.check_positions(['joint_1'], [3.2], merged, start=[3.2 + 1e-7]) is None
+    assert jl.check_positions(['joint_1'], [3.2], merged, start=[3.1]) is not None
     assert jl.check_positions(JOINTS, np.array([-3.0, 0.0, 0.2]), merged).startswith(
         "goal position -3 rad for joint 'joint_1' is outside its range [-2.9, 2.9] rad")
 

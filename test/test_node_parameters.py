@@ -159,10 +159,8 @@ def test_max_jerk_is_set_at_run_time_and_refused_unless_positive(client):
     per_joint = ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY,
                                double_array_value=[10.0, 10.0, 10.0, 40.0, 40.0, 40.0])
     assert client.set_value('max_jerk', per_joint).successful
-    for value, reason in ((double(0.0), 'max_jerk[0] = 0.0: every value must be finite and '
-                                        'positive'),
-                          (integer(-5), 'max_jerk[0] = -5.0: every value must be finite and '
-                                        'positive'),
+    refusal = "max_jerk must be finite and > 0; joint 'joint_1' has "
+    for value, reason in ((double(0.0), refusal + '0.0'), (integer(-5), refusal + '-5.0'),
                           (ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY,
                                           double_array_value=[1.0, 2.0]),
                            'max_jerk has 2 values but there are 6 joints')):

@@ -131,9 +131,10 @@ def test_refusals_name_joints_by_their_ros_names(probe, profile, points, reason)
 @pytest.mark.parametrize('values, reason', [
     ({'profile': 'septic'}, "profile must be one of lspb, cubic, quintic, scurve; got 'septic'"),
     ({'via_velocities': 'smooth'}, 'via_velocities must be one of heuristic, continuous'),
-    ({'max_velocity': -1.0}, r'max_velocity\[0\] = -1.0: every value must be finite and positive'),
+    ({'max_velocity': -1.0}, "max_velocity must be finite and > 0; joint 'joint_1' has -1.0"),
     ({'max_velocity': [1.0, 2.0]}, 'max_velocity has 2 values but there are 6 joints'),
-    ({'max_acceleration': 0.0}, 'max_acceleration.* must be finite and positive'),
+    ({'max_acceleration': 0.0},
+     "max_acceleration must be finite and > 0; joint 'joint_1' has 0.0"),
     ({'max_acceleration': 'fast'}, "Wrong parameter type, expected 'Type.DOUBLE_ARRAY'"),
     ({'lspb_acceleration': 10.0}, 'lspb_acceleration for joint_1 is 10 rad/s.2, above '
                                   'max_acceleration 4'),

@@ -1,4 +1,4 @@
-"""traj_gen_ros.node.position_checks: exact position extrema of plans, refusals with names."""
+"""traj_gen_ros.node.position_checks: requests and plans beyond the position limits."""
 
 import dataclasses
 import math
@@ -6,19 +6,11 @@ import math
 import numpy as np
 import pytest
 from traj_gen_ros import min_time
-from traj_gen_ros.core.paths import plan_path
-from traj_gen_ros.core.stops import brake
-from traj_gen_ros.core.timing import hold
 from traj_gen_ros.node.config import make_config
 from traj_gen_ros.node.motion import State
 from traj_gen_ros.node.parsing import GoalRequest, RequestError, ViaRequest
 from traj_gen_ros.node.planning import plan_request, plan_stop
-from traj_gen_ros.node.position_checks import (
-    check_plan,
-    check_request,
-    outside_ranges,
-    position_extrema,
-)
+from traj_gen_ros.node.position_checks import check_plan, check_request, outside_ranges
 from traj_gen_ros.node.urdf_limits import merge_limits, UrdfLimits
 
 NAMES = ('shoulder', 'elbow', 'wrist')
@@ -28,53 +20,12 @@ def limits(lower=-1.0, upper=1.0):
     return merge_limits(UrdfLimits.unlimited(NAMES), min_position=lower, max_position=upper)
 
 
-def random_plans(count=150, seed=3):
-    rng = np.random.default_rng(seed)
-    v_max, a_max, j_max = np.full(3, 2.0), np.full(3, 4.0), np.full(3, 10.0)
-    for _ in range(count):
-        profile = str(rng.choice(['cubic', 'quintic', 'lspb', 'scurve']))
-        points = rng.normal(size=(int(rng.integers(2, 7)), 3))
-        try:
-            if rng.random() < 0.5:
-                durations = None if profile == 'lspb' else rng.uniform(0.3, 2.0, len(points) - 1)
-                yield plan_path(points, durations, profile, max_velocity=v_max,
-                                max_acceleration=a_max, max_jerk=j_max,
-                                blend_acceleration=a_max)
-            else:
-                yield min_time(points[0], points[1], v_max, a_max, profile,
-                               v0=rng.normal(size=3), max_jerk=j_max,
-                               a0=rng.normal(size=3) if profile in ('quintic', 'scurve')
-                               else 0.0)
-        except ValueError:
-            continue
-
-
-def test_extrema_bound_every_sample_and_are_reached():
-    for plan in random_plans():
-        lowest, highest = position_extrema(plan)
-        q = plan.sample(np.linspace(0.0, plan.duration, 100_001))[0]
-        step = plan.duration / 100_000
-        # Exact: no sample beyond them; dense samples come within v_max * step of them.
-        assert np.all(q.min(axis=0) >= lowest - 1e-12)
-        assert np.all(q.max(axis=0) <= highest + 1e-12)
-        assert np.all(q.min(axis=0) - lowest <= 2.0 * step + 1e-12)
-        assert np.all(highest - q.max(axis=0) <= 2.0 * step + 1e-12)
-
-
-def test_extrema_of_holds_and_brakes():
-    lowest, highest = position_extrema(hold(np.array([0.5, -0.25])))
-    assert lowest.tolist() == [0.5, -0.25] and highest.tolist() == [0.5, -0.25]
-    lowest, highest = position_extrema(brake(np.zeros(2), np.array([1.0, -2.0]),
-                                             np.full(2, 2.0)))
-    assert lowest.tolist() == [0.0, -1.0] and highest.tolist() == [0.25, 0.0]
-
-
 def test_a_moving_start_that_must_brake_past_the_target_is_refused():
     # From 0.6 rad at 2 rad/s, braking at 4 rad/s^2 needs at least 0.5 rad: past 1.
     start = np.array([0.6, 0.0, 0.0])
     plan = min_time(start, np.array([0.8, 0.0, 0.0]), np.full(3, 2.0), np.full(3, 4.0),
                     'quintic', v0=np.array([2.0, 0.0, 0.0]))
-    assert position_extrema(plan)[1][0] > 1.1
+    assert plan.position_extrema().maximum[0] > 1.1
     with pytest.raises(RequestError, match=r"the plan would take joint 'shoulder' to 1\.[0-9]+ "
                                            r'rad, outside its range \[-1, 1\] rad \(lower from '
                                            r'parameter min_position; upper from parameter '
@@ -99,7 +50,7 @@ def test_scurve_plans_in_the_node_keep_the_position_limits():
                            acceleration=np.zeros(3))
     motion = plan_request(config, slow, slow.position,
                           GoalRequest(np.array([0]), np.array([0.8])))
-    assert motion.profile == 'scurve' and position_extrema(motion.plan)[1][0] <= 1.0
+    assert motion.profile == 'scurve' and motion.plan.position_extrema().maximum[0] <= 1.0
     # ~/stop always runs, limits or not (it cannot be refused).
     assert plan_stop(config, moving).plan.duration > 0
 

@@ -17,7 +17,7 @@ from traj_gen_ros import (
 )
 from traj_gen_ros.core.jerk_limited import fallback as scurve_fallback
 from traj_gen_ros.core.jerk_limited.move import scurve, scurve_min_time
-from traj_gen_ros.core.jerk_limited.ruckig_backend import Move
+from traj_gen_ros.core.jerk_limited.problem import Move
 from traj_gen_ros.core.trajectory import Trajectory
 
 FAST = settings(max_examples=80, deadline=None)

@@ -279,3 +279,24 @@ def test_within_limits_uses_the_exact_peaks():
     assert not within_limits(trajectory, np.array([1.5]), np.array([6.0 * (1 - 1e-6)]))
     # Within the 1e-9 relative tolerance.
     assert within_limits(trajectory, np.array([1.5 * (1 - 1e-12)]), np.array([6.0]))
+
+
+def test_lspb_from_above_the_velocity_limit_brakes_then_meets_the_goal_continuously():
+    # Joint 0 starts at 3.19 rad/s above its 2 rad/s limit: it brakes to 2 rad/s at
+    # 4 rad/s² (0.298 s) first. The blends after the brake then fit in the time left.
+    v0 = np.array([3.1912712595277606, -0.8026558518166966, 0.4085878741718514])
+    start = np.array([0.02350354212398124, -0.8758109415176295, 2.103349105524711])
+    goal = np.array([-0.13811509946501047, -0.4884083890455035, -0.6271817143728055])
+    plan = min_time(start, goal, 2.0, 4.0, 'lspb', v0=v0)
+    position, velocity, _ = plan.sample([0.0, plan.duration])
+    assert position[0].tolist() == pytest.approx(start.tolist(), abs=1e-12)
+    assert position[1].tolist() == pytest.approx(goal.tolist(), abs=1e-12)
+    assert velocity[1].tolist() == pytest.approx([0.0, 0.0, 0.0], abs=1e-12)
+    assert plan.breakpoints[1, 0] == pytest.approx((v0[0] - 2.0) / 4.0, rel=1e-12)
+    # Continuous in position and velocity across every breakpoint of every joint.
+    for joint in range(3):
+        for time in plan.breakpoints[1:-1, joint]:
+            before = plan.sample(time - 1e-9)
+            after = plan.sample(time + 1e-9)
+            assert after[0][0, joint] == pytest.approx(before[0][0, joint], abs=1e-7)
+            assert after[1][0, joint] == pytest.approx(before[1][0, joint], abs=1e-7)

@@ -1,3 +1,5 @@
+import math
+
 import numpy as np
 import pytest
 from traj_gen_ros import (
@@ -11,6 +13,7 @@ from traj_gen_ros import (
     quintic_via,
     via_durations,
 )
+from traj_gen_ros.core import validation
 
 NAN, INF = float('nan'), float('inf')
 PATH = [[0.0, 1.0], [1.0, 2.0], [2.0, 0.0]]
@@ -186,3 +189,54 @@ def test_valid_inputs_are_accepted_unchanged():
     trajectory = cubic(np.int64(0), [1, 2], np.float32(2.0))
     assert trajectory.joint_count == 2
     np.testing.assert_allclose(trajectory.sample(2.0)[0], [[1.0, 2.0]])
+
+
+# ---------------------------------------------------------------- the one per-joint broadcaster
+
+
+@pytest.mark.parametrize('value', [2.0, 2, [2.0], np.array([2.0]), np.float64(2.0)])
+def test_per_joint_broadcasts_one_value_to_every_joint(value):
+    assert validation.per_joint('max_velocity', value, 3).tolist() == [2.0, 2.0, 2.0]
+
+
+def test_per_joint_keeps_one_value_per_joint():
+    assert validation.per_joint('max_velocity', [1.0, 2.0, 3.0], 3).tolist() == [1.0, 2.0, 3.0]
+    assert validation.per_joint('min_position', [-math.inf, 0.0], 2, 'any',
+                                infinite=True).tolist() == [-math.inf, 0.0]
+    assert validation.per_joint('lspb_acceleration', 0.0, 2, 'non-negative').tolist() == \
+        [0.0, 0.0]
+
+
+@pytest.mark.parametrize('value, sign, infinite, message', [
+    ([1.0, 2.0], 'positive', False,
+     '^max_velocity has 2 values but there are 3 joints: give one value for all joints or '
+     'one per joint$'),
+    ('fast', 'positive', False,
+     "^max_velocity must be a number or one number per joint, got 'fast'$"),
+    (True, 'positive', False, '^max_velocity must be a number or one number per joint'),
+    ([[1.0, 2.0, 3.0]], 'positive', False, r'got shape \(1, 3\)$'),
+    ([1.0, 0.0, 1.0], 'positive', False,
+     r'^max_velocity must be finite and > 0; joint 1 has 0.0$'),
+    ([1.0, 1.0, math.inf], 'positive', False,
+     r'^max_velocity must be finite and > 0; joint 2 has inf$'),
+    (-1.0, 'non-negative', False, r'^max_velocity must be finite and >= 0; joint 0 has -1.0$'),
+    ([0.0, math.nan, 0.0], 'any', False, r'^max_velocity must be finite; joint 1 has nan$'),
+    ([0.0, math.nan, 0.0], 'any', True,
+     r'^max_velocity must be a number, not NaN \(\+-inf: no limit\); joint 1 has nan$'),
+    (-math.inf, 'positive', True,
+     r'^max_velocity must be > 0 \(inf: no limit\); joint 0 has -inf$'),
+])
+def test_per_joint_refusals_name_the_parameter_and_what_is_valid(value, sign, infinite, message):
+    with pytest.raises(ValueError, match=message):
+        validation.per_joint('max_velocity', value, 3, sign, infinite)
+
+
+@pytest.mark.parametrize('value, digits, text', [
+    (1.2345, 4, '1.235'), (1.7, 9, '1.7'), (1.23456789012, 9, '1.2345679'),
+    (0.1 + 0.2, 4, '0.3'), (1.7976931348623157e308, 4, '1.798e+308'), (5e-324, 4, '4.941e-324'),
+    (0.0, 4, '0'), (math.inf, 4, 'inf'),
+])
+def test_round_up_never_prints_a_smaller_number(value, digits, text):
+    assert validation.round_up(value, digits) == text
+    if math.isfinite(float(text)) and value > 0.0:
+        assert float(text) >= value * (1.0 - 1e-15)  # a round number is not pushed up

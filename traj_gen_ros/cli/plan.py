@@ -14,6 +14,7 @@ import argparse
 import numpy as np
 from traj_gen_ros import core
 from traj_gen_ros.cli.common import joint_names, UsageError
+from traj_gen_ros.core.validation import per_joint
 
 
 class Plan:
@@ -32,10 +33,10 @@ def _per_joint(values: list[float] | None, name: str, joints: int,
                default: float | None = 0.0) -> np.ndarray | None:
     if values is None:
         return None if default is None else np.full(joints, default)
-    if len(values) not in (1, joints):
-        raise UsageError(f'--{name} has {len(values)} values for {joints} joints: give one, '
-                         'or one per joint')
-    return np.broadcast_to(np.asarray(values, dtype=float), (joints,))
+    try:
+        return per_joint(f'--{name}', values, joints, 'any')
+    except ValueError as error:
+        raise UsageError(str(error)) from None
 
 
 def _segment_durations(durations: list[float], points: int) -> np.ndarray:

@@ -15,8 +15,6 @@ duration exactly. That is the book's method, not an error.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from traj_gen_ros.core import validation
 from traj_gen_ros.core.exact import second_order
@@ -53,6 +51,7 @@ class BlendedTrajectory(Trajectory):
         return self.coefficients[1::2, 1]
 
 
+@validation.refuses_overflow('lspb')
 def lspb(
     q0: ArrayLike,
     qf: ArrayLike,
@@ -76,7 +75,7 @@ def lspb(
     """
     rows = validation.per_joint_rows(q0=q0, qf=qf, v0=v0)
     duration = validation.duration_of(duration)
-    acceleration = validation.positive_per_joint('acceleration', acceleration, rows.shape[1])
+    acceleration = validation.per_joint('acceleration', acceleration, rows.shape[1])
     with np.errstate(over='ignore', under='ignore', divide='ignore', invalid='ignore'):
         plan = single_segment(rows[0], rows[1], np.float64(duration), acceleration, rows[2])
     if not (np.isfinite(plan.breakpoints).all() and np.isfinite(plan.coefficients).all()):
@@ -122,7 +121,7 @@ def single_segment(
 def three_pieces(
     start: np.ndarray,
     goal: np.ndarray,
-    duration: float,
+    duration: float | np.ndarray,
     blend_times: tuple[np.ndarray, np.ndarray],
     blend_moves: tuple[np.ndarray, np.ndarray],
     cruise: np.ndarray,
@@ -131,6 +130,8 @@ def three_pieces(
 ) -> BlendedTrajectory:
     """
     Assemble blend, line, blend from their timing, all ``(joints,)`` arrays.
+
+    ``duration`` (s) is the end of the last blend: one for all joints, or one per joint.
 
     The first blend takes ``start_velocity`` to ``cruise`` in ``blend_times[0]`` covering
     ``blend_moves[0]``; the last takes ``cruise`` to rest in ``blend_times[1]`` covering
@@ -149,6 +150,7 @@ def three_pieces(
     return BlendedTrajectory(breakpoints, coefficients)
 
 
+@validation.refuses_overflow('lspb_via')
 def lspb_via(
     points: ArrayLike,
     durations: ArrayLike,
@@ -177,7 +179,7 @@ def lspb_via(
     """
     path = validation.path_points(points)
     durations = validation.segment_durations(durations, len(path) - 1)
-    acceleration = validation.positive_per_joint('acceleration', acceleration, path.shape[1])
+    acceleration = validation.per_joint('acceleration', acceleration, path.shape[1])
     start_velocity = validation.per_joint_rows(v0=v0, like=path[0])[0]
     if len(path) == 2:
         return single_segment(path[0], path[1], durations[0], acceleration, start_velocity)
@@ -188,7 +190,7 @@ def lspb_via(
         minimum = _smallest_fitting_acceleration(path, durations, acceleration, start_velocity)
         raise JointError(f'lspb_via: {{joint}}: {reason} with acceleration '
                          f'{acceleration[joint]:g}; the smallest acceleration that fits is '
-                         f'{_round_up(minimum[joint])}', joint)
+                         f'{validation.round_up(minimum[joint], 4)}', joint)
     blend_times, velocities, _, _ = timing
     return _assemble(path, durations, blend_times, velocities, start_velocity, acceleration)
 
@@ -207,13 +209,14 @@ def _rest_start_blend_time(
     too_low = room < -_FEASIBILITY_TOLERANCE
     if np.count_nonzero(too_low):
         joint = int(np.argmax(too_low))
-        minimum = 4.0 * abs(displacement[joint]) / duration**2
+        minimum = 4.0 * abs(displacement[joint]) / duration / duration
         raise JointError(
             f'lspb: {{joint}}: acceleration {acceleration[joint]:g} is too low to move '
             f'{displacement[joint]:g} in {duration:g} s; eq. (6) needs at least '
-            f'{_round_up(minimum)}', joint)
-    return 2.0 * np.abs(displacement) / acceleration / (
-        duration * (1.0 + np.sqrt(np.maximum(room, 0.0))))
+            f'{validation.round_up(minimum, 4)}', joint)
+    # (T (1 + √room) would overflow for T near the largest float: divide by T first.)
+    return np.abs(displacement) / acceleration / duration * (
+        2.0 / (1.0 + np.sqrt(np.maximum(room, 0.0))))
 
 
 def _via_timing(
@@ -379,11 +382,3 @@ def _assemble(
     coefficients[0::2, 1], coefficients[1::2, 1] = incoming, velocities
     coefficients[0::2, 2] = 0.5 * blend_accelerations
     return BlendedTrajectory(starts, coefficients)
-
-
-def _round_up(value: float, digits: int = 4) -> str:
-    """``value`` rounded up to ``digits`` significant digits, so the printed number works."""
-    if value <= 0.0 or not math.isfinite(value):
-        return f'{value:g}'
-    step = 10.0 ** (math.floor(math.log10(value)) - digits + 1)
-    return f'{math.ceil(value / step - 1e-9) * step:.{digits}g}'

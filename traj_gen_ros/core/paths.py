@@ -24,6 +24,7 @@ from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.core.validation import ArrayLike
 
 
+@validation.refuses_overflow('plan_path')
 def plan_path(
     points: ArrayLike,
     durations: ArrayLike | None,
@@ -63,7 +64,7 @@ def plan_path(
         if not isinstance(velocities, str) or accelerations is not None:
             raise ValueError('lspb takes the velocities at via points from the segment slopes '
                              '(Craig 7.3): it cannot honour given velocities/accelerations')
-        blend_acceleration = validation.positive_per_joint(
+        blend_acceleration = validation.per_joint(
             'blend_acceleration', blend_acceleration, joint_count)
     if profile == 'cubic' and accelerations is not None:
         raise ValueError('cubic cannot honour accelerations at via points: use quintic')
@@ -82,9 +83,8 @@ def plan_path(
     if max_velocity is None or max_acceleration is None:
         raise ValueError('timing a path from the limits needs max_velocity and '
                          'max_acceleration')
-    max_velocity = validation.positive_per_joint('max_velocity', max_velocity, joint_count)
-    max_acceleration = validation.positive_per_joint('max_acceleration', max_acceleration,
-                                                     joint_count)
+    max_velocity = validation.per_joint('max_velocity', max_velocity, joint_count)
+    max_acceleration = validation.per_joint('max_acceleration', max_acceleration, joint_count)
     rule = velocities if isinstance(velocities, str) else 'heuristic'
     base = via_durations(path, max_velocity, max_acceleration, profile, rule,
                          blend_acceleration)

@@ -40,12 +40,15 @@ QUINTIC_MATRIX = np.array([
 _QUINTIC_ORDERS = np.array([0, 1, 2, 0, 1, 2])
 _QUINTIC_EXPONENTS = _QUINTIC_ORDERS[None, :] - np.arange(6)[:, None]
 
-# Shorter segments would overflow t_f**-5 (float64 reaches 1.8e308).
+# Shorter segments would overflow t_f**-5 (float64 reaches 1.8e308), longer ones underflow
+# it (a quintic's a5 = 6 Δθ / t_f**5 would vanish: a plan that silently stands still).
 _SHORTEST_SEGMENT = 1e-60
+_LONGEST_SEGMENT = 1e60
 # Above this many unknown via velocities the dense solve gives way to the O(n) sweep.
 _DENSE_SOLVE_LIMIT = 128
 
 
+@validation.refuses_overflow('cubic')
 def cubic(
     q0: ArrayLike, qf: ArrayLike, duration: float, v0: ArrayLike = 0.0, vf: ArrayLike = 0.0
 ) -> Trajectory:
@@ -62,6 +65,7 @@ def cubic(
                      np.array([duration]))
 
 
+@validation.refuses_overflow('quintic')
 def quintic(
     q0: ArrayLike,
     qf: ArrayLike,
@@ -102,16 +106,18 @@ def to_rest(profile: str, start: np.ndarray, goal: np.ndarray, duration: float,
     else:
         conditions[0, 2] = start_acceleration
         np.subtract(goal, start, out=conditions[0, 3])
-    if not duration >= _SHORTEST_SEGMENT:  # let _segments say what is wrong
+    if not _SHORTEST_SEGMENT <= duration <= _LONGEST_SEGMENT:  # _segments says what is wrong
         return _segments(matrix, exponents, start[None], conditions, np.array([duration]))
     # _segments' product for one segment, without its array bookkeeping.
-    coefficients = (matrix * duration ** exponents) @ conditions
-    coefficients[:, 0] += start
+    with np.errstate(over='ignore', invalid='ignore'):  # checked right below
+        coefficients = (matrix * duration ** exponents) @ conditions
+        coefficients[:, 0] += start
     if not validation.every(np.isfinite(coefficients)):
         return _segments(matrix, exponents, start[None], conditions, np.array([duration]))
     return Trajectory(np.array([0.0, duration]), coefficients)
 
 
+@validation.refuses_overflow('cubic_via')
 def cubic_via(
     points: ArrayLike,
     durations: ArrayLike,
@@ -138,6 +144,7 @@ def cubic_via(
     return _segments(CUBIC_MATRIX, _CUBIC_EXPONENTS, path[:-1], boundary, durations)
 
 
+@validation.refuses_overflow('quintic_via')
 def quintic_via(
     points: ArrayLike,
     durations: ArrayLike,
@@ -281,13 +288,18 @@ def _segments(
     if np.count_nonzero(durations < _SHORTEST_SEGMENT):  # (cheaper than .min() on a few)
         raise ValueError(f'segment {int(np.argmin(durations))} lasts {durations.min():g} s: '
                          f'polynomial segments must last at least {_SHORTEST_SEGMENT:g} s')
-    coefficients = (matrix * durations[:, None, None] ** exponents) @ boundary
-    coefficients[:, 0] += start
+    if np.count_nonzero(durations > _LONGEST_SEGMENT):
+        raise ValueError(f'segment {int(np.argmax(durations))} lasts {durations.max():g} s: '
+                         f'polynomial segments must last at most {_LONGEST_SEGMENT:g} s (their '
+                         'coefficients would underflow)')
+    with np.errstate(over='ignore', invalid='ignore'):  # checked right below
+        coefficients = (matrix * durations[:, None, None] ** exponents) @ boundary
+        coefficients[:, 0] += start
     if not validation.every(np.isfinite(coefficients)):
         segment = int(np.argmin(np.isfinite(coefficients).all(axis=(1, 2))))
         raise ValueError(f'segment {segment} lasts {durations[segment]:g} s, too short for its '
-                         'boundary conditions: its coefficients overflow; give a longer '
-                         'duration')
+                         'boundary conditions (or its positions and velocities too large): its '
+                         'coefficients overflow; give a longer duration or smaller values')
     breakpoints = np.zeros(len(durations) + 1)
     np.cumsum(durations, out=breakpoints[1:])
     return Trajectory(breakpoints, coefficients)

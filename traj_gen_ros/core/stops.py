@@ -14,6 +14,7 @@ from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.core.validation import ArrayLike
 
 
+@validation.refuses_overflow('brake')
 def brake(q0: ArrayLike, v0: ArrayLike, max_acceleration: ArrayLike) -> Trajectory:
     """
     Stop every joint as fast as its ``max_acceleration`` allows, then hold.
@@ -25,7 +26,7 @@ def brake(q0: ArrayLike, v0: ArrayLike, max_acceleration: ArrayLike) -> Trajecto
     """
     rows = validation.per_joint_rows(q0=q0, v0=v0)
     start, velocity = rows
-    limit = validation.positive_per_joint('max_acceleration', max_acceleration, rows.shape[1])
+    limit = validation.per_joint('max_acceleration', max_acceleration, rows.shape[1])
     stop_times = np.abs(velocity) / limit
     deceleration = -np.sign(velocity) * limit
     breakpoints = np.empty((3, start.size))

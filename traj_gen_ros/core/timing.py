@@ -27,7 +27,10 @@ import numpy as np
 from traj_gen_ros.core import validation
 from traj_gen_ros.core.blends import lspb_via, three_pieces
 from traj_gen_ros.core.exact import second_order
-from traj_gen_ros.core.exact.polynomial_durations import minimum_duration, SHORTEST_POLYNOMIAL
+from traj_gen_ros.core.exact.polynomial_durations import (
+    polynomial_minimum_duration,
+    SHORTEST_POLYNOMIAL,
+)
 from traj_gen_ros.core.jerk_limited.move import scurve_min_time
 from traj_gen_ros.core.jerk_limited.path import scurve_via_durations
 from traj_gen_ros.core.kinematic_limits import JointError, within_limits
@@ -47,6 +50,7 @@ def check_profile(profile: str) -> None:
         raise ValueError(f'profile must be one of {", ".join(PROFILES)}, got "{profile}"')
 
 
+@validation.refuses_overflow('min_time')
 def min_time(
     q0: ArrayLike,
     qf: ArrayLike,
@@ -203,6 +207,7 @@ def rest_to_rest_times(
                       np.sqrt(acceleration_peak * distance / max_acceleration))
 
 
+@validation.refuses_overflow('hold')
 def hold(positions: ArrayLike) -> Trajectory:
     """Return a zero-duration trajectory that holds ``positions`` (rad) at rest."""
     positions = validation.per_joint_rows(positions=positions)[0]
@@ -250,6 +255,7 @@ def shortest_duration(
     return best
 
 
+@validation.refuses_overflow('via_durations')
 def via_durations(
     points: ArrayLike,
     max_velocity: ArrayLike,
@@ -272,8 +278,8 @@ def via_durations(
     """
     path = validation.path_points(points)
     joint_count = path.shape[1]
-    max_velocity = validation.positive_per_joint('max_velocity', max_velocity, joint_count)
-    max_acceleration = validation.positive_per_joint(
+    max_velocity = validation.per_joint('max_velocity', max_velocity, joint_count)
+    max_acceleration = validation.per_joint(
         'max_acceleration', max_acceleration, joint_count)
     check_profile(profile)
     if profile == 'scurve':
@@ -284,7 +290,7 @@ def via_durations(
     if velocities not in ('heuristic', 'continuous'):
         raise ValueError(f'velocities must be "heuristic" or "continuous", got "{velocities}"')
     blend_acceleration = max_acceleration if acceleration is None else (
-        validation.positive_per_joint('acceleration', acceleration, joint_count))
+        validation.per_joint('acceleration', acceleration, joint_count))
     steps = np.abs(np.diff(path, axis=0))
     base = rest_to_rest_times(steps, max_velocity, max_acceleration, profile).max(axis=1)
     if np.max(steps) <= 1e-12 * max(1.0, float(np.max(np.abs(path)))):
@@ -331,7 +337,7 @@ def _moving_min_time(
     else:
         start_acceleration = magnitude = np.zeros_like(start_velocity)
     # Start terms far below their limits (1e-12) only blur the candidate polynomials' degree.
-    duration, hopeless = minimum_duration(
+    duration, hopeless = polynomial_minimum_duration(
         profile, goal - start,
         start_velocity * (speed >= 1e-12 * max_velocity),
         start_acceleration * (magnitude >= 1e-12 * max_acceleration),
@@ -379,20 +385,22 @@ def _moving_lspb(
     moves = (0.5 * (velocity + cruise) * first, 0.5 * cruise * last)
     accelerations = (np.sign(cruise - velocity) * max_acceleration,
                      -np.sign(cruise) * max_acceleration)
-    blended = three_pieces(start + brake_move, goal, duration, (first, last), moves, cruise,
+    # Blend, line, blend fill the time after each joint's brake (``remaining``, per joint).
+    blended = three_pieces(start + brake_move, goal, remaining, (first, last), moves, cruise,
                            velocity, accelerations)
     if not np.count_nonzero(brake_time):
         return blended
-    return _with_brake(start, start_velocity, brake_time, max_acceleration, blended)
+    return _with_brake(start, start_velocity, brake_time, max_acceleration, blended, duration)
 
 
 def _with_brake(start: np.ndarray, start_velocity: np.ndarray, brake_time: np.ndarray,
-                max_acceleration: np.ndarray, blended: Trajectory) -> Trajectory:
+                max_acceleration: np.ndarray, blended: Trajectory,
+                duration: float) -> Trajectory:
     """Prepend the brake piece to blend, line, blend shifted by ``brake_time``."""
     breakpoints = np.empty((5, start.size))
     breakpoints[0] = 0.0
     breakpoints[1:] = brake_time + blended.breakpoints
-    breakpoints[-1] = blended.duration
+    breakpoints[-1] = duration
     coefficients = np.zeros((4, 3, start.size))
     coefficients[0, 0], coefficients[0, 1] = start, start_velocity
     coefficients[0, 2] = -0.5 * np.sign(start_velocity) * max_acceleration * (brake_time > 0)

@@ -12,9 +12,11 @@ from __future__ import annotations
 
 from functools import cached_property
 import math
+from typing import NamedTuple
 
 import numpy as np
 from traj_gen_ros.core.exact.unit_peaks import unit_peaks
+from traj_gen_ros.core.exact.unit_roots import roots_in_unit_interval
 
 # Samples per piece above which each piece is evaluated as one matrix product.
 _SAMPLES_PER_PIECE_FOR_MATMUL = 16
@@ -23,6 +25,15 @@ _SAMPLES_PER_PRODUCT = 4096  # keeps each product's operands in cache
 _JOINTS_FOR_MERGING = 16
 # Per-joint breakpoints up to this many are compared at once; more use searchsorted.
 _PIECES_FOR_COMPARISON = 16
+
+
+class PositionExtrema(NamedTuple):
+    """Per joint lowest and highest position (rad or m) and their times (s), ``(joints,)``."""
+
+    minimum: np.ndarray
+    maximum: np.ndarray
+    time_of_minimum: np.ndarray
+    time_of_maximum: np.ndarray
 
 
 class Trajectory:
@@ -123,6 +134,44 @@ class Trajectory:
         """Largest ``|jerk|`` (rad/s³) per joint, ``(joints,)``: exact, from the coefficients."""
         jerk = _derivative(_derivative(_derivative(self.coefficients)))
         return peak_abs(self._piece_durations(self.joint_count), jerk)[0]
+
+    def position_extrema(self) -> PositionExtrema:
+        """
+        Find each joint's lowest and highest position and when it is reached, exactly.
+
+        As Ruckig's ``Trajectory::get_position_extrema``: every extremum of a polynomial
+        piece lies at one of its ends or at a real root of its velocity. Each piece is
+        rescaled to unit time (``c_k L^k``, ``s = t / L``) and the real roots in
+        ``[0, 1]`` of every piece's velocity, all joints at once, come from
+        :func:`traj_gen_ros.core.exact.unit_roots.roots_in_unit_interval`. Every candidate
+        is a position the plan takes, and every extremum is a candidate: exact to
+        rounding, never a sampled estimate that could miss an overshoot. On a tie the
+        earliest time is given. Positions in rad (or m), times in s, ``(joints,)`` each.
+        """
+        pieces, size, joints = self.coefficients.shape
+        lengths = self._piece_durations(joints).reshape(-1)  # piece-major: piece·joints + j
+        starts = np.broadcast_to(self.breakpoints[:-1].reshape(pieces, -1),
+                                 (pieces, joints)).reshape(-1)
+        rows = np.moveaxis(self.coefficients, 1, 2).reshape(-1, size).copy()
+        for power in range(1, size):  # c_k L^k as c_k L … L: no L^k to overflow
+            rows[:, power:] *= lengths[:, None]
+        owners = [np.arange(rows.shape[0])] * 2
+        values, times = [rows[:, 0], rows.sum(axis=1)], [starts, starts + lengths]
+        if size > 2:
+            roots, of = roots_in_unit_interval(_without_end_roots(rows[:, 1:] *
+                                                                  np.arange(1.0, size)))
+            owners.append(of)
+            values.append(polyval(rows[of], roots[:, None])[:, 0])
+            times.append(starts[of] + roots * lengths[of])
+        joint = np.concatenate(owners) % joints
+        values, times = np.concatenate(values), np.concatenate(times)
+        # Sorted by joint, then value (rising for the minimum, falling for the maximum),
+        # then time: each joint's first entry is its extremum.
+        lowest = np.lexsort((times, values, joint))
+        highest = np.lexsort((times, -values, joint))
+        first = np.searchsorted(joint[lowest], np.arange(joints))
+        return PositionExtrema(values[lowest[first]], values[highest[first]],
+                               times[lowest[first]], times[highest[first]])
 
     def _sample_per_joint(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """
@@ -321,11 +370,35 @@ def _derivative(coefficients: np.ndarray) -> np.ndarray:
     return coefficients[:, 1:] * powers
 
 
-def _polyval(coefficients: np.ndarray, local_time: np.ndarray) -> np.ndarray:
-    """Evaluate ``(pieces, n + 1, joints)`` coefficients at ``(pieces, k, joints)`` times."""
-    value = np.zeros_like(local_time)
+def _without_end_roots(velocity: np.ndarray) -> np.ndarray:
+    """
+    Divide roots at ``s = 0`` and ``s = 1`` (up to double ones) out of ascending rows.
+
+    A piece that starts or ends at rest has its velocity's roots there; the ends are
+    extremum candidates anyway, and such roots would send the root finder to its slow,
+    eigenvalue path. ``p(s) = s q(s)`` shifts the coefficients; ``p(s) = (s - 1) q(s)``
+    has ``q``'s descending coefficients as the running sums of ``p``'s (synthetic division).
+    """
+    velocity = velocity.copy()
+    for _ in range(2):
+        scale = np.abs(velocity).max(axis=1)
+        start = (np.abs(velocity[:, 0]) <= 1e-12 * scale) & (scale > 0.0)
+        velocity[start, :-1], velocity[start, -1] = velocity[start, 1:], 0.0
+        end = (np.abs(velocity.sum(axis=1)) <= 1e-12 * scale) & (scale > 0.0)
+        quotient = np.cumsum(velocity[end, ::-1], axis=1)[:, :-1]
+        velocity[end, :-1], velocity[end, -1] = quotient[:, ::-1], 0.0
+    return velocity
+
+
+def polyval(coefficients: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """
+    Evaluate each row's ascending ``coefficients`` ``(rows, n + 1)`` at its ``points``.
+
+    ``points`` is ``(rows, k)``; returns ``(rows, k)`` values, by Horner's rule.
+    """
+    value = np.zeros_like(points)
     for power in range(coefficients.shape[1] - 1, -1, -1):
-        value = value * local_time + coefficients[:, power][:, None, :]
+        value = value * points + coefficients[:, power][:, None]
     return value
 
 

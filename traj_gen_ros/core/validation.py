@@ -7,11 +7,42 @@ where (which argument, joint or point) and what would be valid.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from decimal import Decimal
+import functools
+import math
+import sys
+from typing import Literal, TypeVar
 
 import numpy as np
 
 ArrayLike = float | Sequence[float] | np.ndarray
+Planner = TypeVar('Planner', bound=Callable)
+
+
+def refuses_overflow(caller: str) -> Callable[[Planner], Planner]:
+    """
+    Make a public planner refuse inputs whose arithmetic leaves float64, never return junk.
+
+    The planner runs with numpy's overflow, division by zero and invalid results raised
+    (code that expects them says so with its own ``np.errstate``); one of them, or a
+    Python ``OverflowError``, becomes a ``ValueError`` naming ``caller`` and why. Extreme
+    magnitudes (positions or durations near 1e308, limits near 1e-308) are then refused
+    instead of giving a plan that is silently wrong.
+    """
+    def decorate(planner: Planner) -> Planner:
+        @functools.wraps(planner)
+        def guarded(*args: object, **kwargs: object) -> object:
+            try:
+                with np.errstate(over='raise', divide='raise', invalid='raise'):
+                    return planner(*args, **kwargs)
+            except (FloatingPointError, OverflowError) as error:
+                raise ValueError(
+                    f'{caller}: the inputs leave the range of float64 ({error}); use '
+                    'smaller positions and velocities, or durations and limits closer to '
+                    'each other') from None
+        return guarded  # type: ignore[return-value]
+    return decorate
 
 
 def every(mask: np.ndarray) -> bool:
@@ -22,6 +53,27 @@ def every(mask: np.ndarray) -> bool:
     joints of a plan it is several times faster, and a node may plan at kHz rates.
     """
     return np.count_nonzero(mask) == mask.size
+
+
+def round_up(value: float, digits: int) -> str:
+    """
+    Print ``value`` rounded up to ``digits`` significant digits, so the printed number works.
+
+    A limit named in a refusal (a minimum duration, s) is printed rounded *up*: passing
+    the printed number back is then never too short. Values that are not finite and > 0
+    are printed as they are; a value whose rounding up passes the largest float is
+    printed exactly (``1.798e+308``) rather than as ``inf``.
+    """
+    if not math.isfinite(value) or value <= 0.0:
+        return f'{value:g}'
+    exact = Decimal(value)  # the float's exact value: no overflow, no underflow
+    exponent = exact.adjusted() - digits + 1
+    # (1 - 1e-15): a value that is already a round number is not pushed up by its rounding.
+    mantissa = math.ceil(exact.scaleb(-exponent) * (1 - Decimal('1e-15')))
+    rounded = Decimal(mantissa).scaleb(exponent)
+    if rounded <= Decimal(sys.float_info.max):
+        return f'{float(rounded):.{digits}g}'
+    return format(rounded, f'.{digits}g')
 
 
 def _describe_bad(values: np.ndarray, item: str = 'joint') -> str:
@@ -80,25 +132,63 @@ def duration_of(value: float, name: str = 'duration') -> float:
     return float(array)
 
 
-def positive_per_joint(name: str, value: ArrayLike, joint_count: int) -> np.ndarray:
-    """Return a per-joint limit (one for all, or one per joint), finite and > 0: ``(joints,)``."""
-    if isinstance(value, int | float):
-        if not 0.0 < value < np.inf:
-            raise ValueError(f'{name} must be finite and > 0, got {value}')
-        return np.full(joint_count, float(value))
-    try:
-        array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f'{name} must be numbers: {error}') from None
-    if array.ndim == 0:
-        return positive_per_joint(name, float(array), joint_count)
-    if array.shape != (joint_count,):
-        raise ValueError(f'{name} is shaped {array.shape} for {joint_count} joints; '
-                         'give one value, or one per joint')
-    valid = (array > 0.0) & (array < np.inf)
+Sign = Literal['positive', 'non-negative', 'any']
+_VALID = {('positive', False): 'finite and > 0', ('non-negative', False): 'finite and >= 0',
+          ('any', False): 'finite', ('positive', True): '> 0 (inf: no limit)',
+          ('non-negative', True): '>= 0 (inf: no limit)',
+          ('any', True): 'a number, not NaN (+-inf: no limit)'}
+
+
+def per_joint(name: str, value: object, joint_count: int, sign: Sign = 'positive',
+              infinite: bool = False, joints: Sequence[str] | None = None) -> np.ndarray:
+    """
+    Return a per-joint value given as one number for all joints or one per joint.
+
+    The one broadcaster of the package: the core's limits, the node's parameters, the
+    URDF merge and the command line's options all go through it.
+
+    :param name: the argument or parameter, named in the error message.
+    :param value: a number, or a sequence of one or ``joint_count`` numbers.
+    :param joint_count: how many joints.
+    :param sign: ``'positive'`` (> 0), ``'non-negative'`` (>= 0) or ``'any'``.
+    :param infinite: whether ±inf is allowed (meaning: no limit); NaN never is.
+    :param joints: the joints' names, to name the first joint out of range by its name
+        (else by its index, from 0).
+    :return: ``(joint_count,)`` floats, in the unit of ``value``.
+    :raises ValueError: naming ``name`` and what is valid: not numbers, a count that is
+        neither 1 nor ``joint_count``, or a value out of range (naming the first joint).
+    """
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        array = np.full(joint_count, float(value))
+    else:
+        if isinstance(value, bool | str) or value is None:
+            raise ValueError(f'{name} must be a number or one number per joint, got {value!r}')
+        try:
+            array = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f'{name} must be a number or one number per joint, '
+                             f'got {value!r}') from None
+        if array.ndim > 1:
+            raise ValueError(f'{name} must be a number or one number per joint, '
+                             f'got shape {array.shape}')
+        if array.size == 1:
+            array = np.full(joint_count, float(array.reshape(-1)[0]))
+        elif array.size != joint_count:
+            raise ValueError(f'{name} has {array.size} values but there are {joint_count} '
+                             'joints: give one value for all joints or one per joint')
+    if sign == 'positive':
+        valid = array > 0.0
+    elif sign == 'non-negative':
+        valid = array >= 0.0
+    else:
+        valid = ~np.isnan(array)
+    if not infinite:
+        valid &= np.isfinite(array)
     if not every(valid):
         joint = int(np.argmin(valid))
-        raise ValueError(f'{name} must be finite and > 0; joint {joint} has {array[joint]}')
+        which = f'joint {joint}' if joints is None else f'joint {joints[joint]!r}'
+        raise ValueError(f'{name} must be {_VALID[sign, infinite]}; {which} has '
+                         f'{array[joint]}')
     return array
 
 

@@ -13,14 +13,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 from traj_gen_ros.core.timing import PROFILES  # the core's: the node offers every profile
-
-if TYPE_CHECKING:
-    from traj_gen_ros.node.urdf_limits import JointLimits
+from traj_gen_ros.core.validation import per_joint
+from traj_gen_ros.node.urdf_limits import JointLimits
 
 #: Jerk limit (rad/s³) when ``max_jerk`` is not given: the S-curve's.
 DEFAULT_MAX_JERK = 20.0
@@ -74,34 +71,6 @@ class Config:
         return int(1e9 / self.rate_hz)
 
 
-def per_joint(name: str, value: object, joint_count: int, allow_zero: bool = False) -> np.ndarray:
-    """
-    Broadcast a parameter given as one number or one number per joint; check it.
-
-    Raises ``ValueError`` naming the parameter when the value is not a number or a list of
-    ``joint_count`` numbers, or when a value is not finite and positive (or zero, if allowed).
-    """
-    if isinstance(value, bool) or isinstance(value, str):
-        raise ValueError(f'{name} must be a number or a list of {joint_count} numbers, '
-                         f'got {value!r}')
-    try:
-        array = np.asarray(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ValueError(f'{name} must be a number or a list of {joint_count} numbers, '
-                         f'got {value!r}') from None
-    if array.size == 1:
-        array = np.full(joint_count, array[0])
-    elif array.size != joint_count:
-        raise ValueError(f'{name} has {array.size} values but there are {joint_count} joints: '
-                         f'give one value for all joints or one per joint')
-    bound = 'non-negative' if allow_zero else 'positive'
-    for index, item in enumerate(array):
-        if not math.isfinite(item) or item < 0.0 or (item == 0.0 and not allow_zero):
-            raise ValueError(f'{name}[{index}] = {float(item)!r}: every value must be finite '
-                             f'and {bound}')
-    return array
-
-
 def check_joint_names(joints: Sequence[str]) -> tuple[str, ...]:
     """Check the ``joints`` parameter: non-empty, non-empty names, no duplicates."""
     names = tuple(joints)
@@ -153,10 +122,11 @@ def make_config(joints: Sequence[str], rate_hz: float, profile: str, via_velocit
         raise ValueError(f'via_velocities must be one of {", ".join(VIA_VELOCITIES)}; '
                          f'got {via_velocities!r}')
     count = len(names)
-    v_max = per_joint('max_velocity', max_velocity, count)
-    a_max = per_joint('max_acceleration', max_acceleration, count)
-    a_lspb = per_joint('lspb_acceleration', lspb_acceleration, count, allow_zero=True)
-    j_max = per_joint('max_jerk', max_jerk, count)
+    v_max = per_joint('max_velocity', max_velocity, count, joints=names)
+    a_max = per_joint('max_acceleration', max_acceleration, count, joints=names)
+    a_lspb = per_joint('lspb_acceleration', lspb_acceleration, count, 'non-negative',
+                       joints=names)
+    j_max = per_joint('max_jerk', max_jerk, count, joints=names)
     too_high = np.flatnonzero(a_lspb > a_max)
     if too_high.size:
         index = too_high[0]

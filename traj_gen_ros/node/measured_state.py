@@ -23,7 +23,7 @@ from collections.abc import Sequence
 import math
 
 import numpy as np
-from traj_gen_ros.node.config import per_joint
+from traj_gen_ros.core.validation import per_joint
 from traj_gen_ros.node.diagnostics import ERROR, OK, WARN
 
 #: Default ``state_tolerance`` (rad): farther than this from the held setpoint re-seeds it.
@@ -56,7 +56,7 @@ class MeasuredState:
         self.joints = tuple(joints)
         self.topic = topic
         self.tolerance = per_joint('state_tolerance', tolerance, len(self.joints),
-                                   allow_zero=True)
+                                   'non-negative', joints=self.joints)
         self.timeout = check_timeout(timeout)
         self.position: np.ndarray | None = None  # the latest valid positions (rad)
         self.received_at = 0.0  # time.monotonic() of the latest valid message

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import math
 
 import numpy as np
+from traj_gen_ros.core.validation import per_joint
 from traj_gen_ros.node.urdf_joints import read_joints, UrdfJoint
 
 URDF = 'urdf'
@@ -37,6 +38,8 @@ _MOVABLE = ('revolute', 'continuous', 'prismatic')
 _SOURCE_TEXT = {URDF: 'URDF', NONE: 'none'}
 _PARAMETER_NAME = {'lower': 'min_position', 'upper': 'max_position',
                    'velocity': 'max_velocity'}
+#: Slack on a position bound (relative to ``max(1, |bound|)``): rounding, not an excess.
+POSITION_TOLERANCE = 1e-9
 
 
 def _frozen(values: Sequence[float]) -> np.ndarray:
@@ -164,18 +167,6 @@ def _joint_bounds(joint: UrdfJoint) -> tuple[float, float, float]:
     return lower, upper, limit['velocity']
 
 
-def _per_joint(values: float | Sequence[float], name: str, count: int) -> np.ndarray:
-    array = np.asarray(values, dtype=float)
-    if array.ndim == 0:
-        array = np.full(count, float(array))
-    if array.shape != (count,):
-        raise ValueError(f'{name} has {array.size} values but there are {count} joints: give '
-                         'one value for all joints or one per joint')
-    if np.isnan(array).any():
-        raise ValueError(f'{name} must not be NaN')
-    return array
-
-
 def merge_limits(urdf: UrdfLimits, *, min_position: float | Sequence[float] = -math.inf,
                  max_position: float | Sequence[float] = math.inf,
                  max_velocity: float | Sequence[float] = math.inf) -> JointLimits:
@@ -191,14 +182,16 @@ def merge_limits(urdf: UrdfLimits, *, min_position: float | Sequence[float] = -m
         -inf, ``max_velocity <= 0``, or a joint whose merged range is empty.
     """
     count = len(urdf.joints)
-    parameter_lower = _per_joint(min_position, 'min_position', count)
-    parameter_upper = _per_joint(max_position, 'max_position', count)
-    parameter_velocity = _per_joint(max_velocity, 'max_velocity', count)
+    names = urdf.joints
+    parameter_lower = per_joint('min_position', min_position, count, 'any', infinite=True,
+                                joints=names)
+    parameter_upper = per_joint('max_position', max_position, count, 'any', infinite=True,
+                                joints=names)
+    parameter_velocity = per_joint('max_velocity', max_velocity, count, infinite=True,
+                                   joints=names)
     if (parameter_lower == math.inf).any() or (parameter_upper == -math.inf).any():
         raise ValueError('min_position cannot be +inf nor max_position -inf (use -inf and '
                          '+inf respectively for no limit)')
-    if (parameter_velocity <= 0).any():
-        raise ValueError('max_velocity must be > 0 (inf: no limit)')
 
     lower = np.maximum(urdf.lower, parameter_lower)
     upper = np.minimum(urdf.upper, parameter_upper)
@@ -274,39 +267,75 @@ def describe_sources(limits: JointLimits) -> str:
     return '; '.join(parts)
 
 
-def check_positions(names: Sequence[str], positions: Sequence[float], limits: JointLimits,
-                    what: str = 'goal position') -> str | None:
+def describe_range(limits: JointLimits, index: int) -> str:
+    """
+    Say a joint's position range and where each bound came from.
+
+    E.g. ``[-2.9, 2.9] rad (lower from URDF; upper from parameter max_position)``.
+    """
+    position, unit = limits.position, limits.units[index]
+    origins = '; '.join(
+        f'{bound} from {_describe_origin(sources[index], bound)}'
+        for bound, sources in (('lower', position.lower_source),
+                               ('upper', position.upper_source)))
+    return f'[{position.lower[index]:.6g}, {position.upper[index]:.6g}] {unit} ({origins})'
+
+
+def check_positions(names: Sequence[str], positions: Sequence[float] | np.ndarray,
+                    limits: JointLimits, what: str = 'goal position',
+                    start: Sequence[float] | np.ndarray | None = None) -> str | None:
     """
     Check positions of named joints against their position limits.
 
+    The one position check: the node refuses a goal or via point with it
+    (:func:`traj_gen_ros.node.position_checks.check_request`). A position may exceed a
+    bound by :data:`POSITION_TOLERANCE` (relative to ``max(1, |bound|)``: rounding).
+
     :param names: joint names, any subset of ``limits.joints`` in any order.
-    :param positions: one position per name, rad or m.
+    :param positions: one position per name, rad or m; or rows of them, ``(points, names)``.
     :param limits: the limits in force (:func:`merge_limits`).
-    :param what: what the positions are, for the sentence (e.g. ``'via point 2 position'``).
+    :param what: what the positions are, for the sentence (e.g. ``'via point 2 position'``);
+        ``{point}`` in it is replaced by the row of a 2-D ``positions``.
+    :param start: each named joint's current position (rad or m), or ``None``. A joint
+        that starts outside its range may stay there or move toward or into its range:
+        its positions must lie within ``[min(start, lower), max(start, upper)]``, the
+        range widened to the start; only further out is refused.
     :return: ``None`` when every position is within its range (bounds included); otherwise
-        one sentence for the first offending joint, naming it, the value, the valid range
-        and where the broken bound came from, e.g. ``goal position 3.2 rad for joint
-        'joint_2' is outside its range [-2.9, 2.9] rad (upper from URDF)``.
+        one sentence for the first offending point and, in it, the first offending joint,
+        naming it, the value, the valid range and where each bound came from, e.g. ``goal
+        position 3.2 rad for joint 'joint_2' is outside its range [-2.9, 2.9] rad (lower
+        from URDF; upper from URDF)``.
     :raises ValueError: ``names`` and ``positions`` differ in length.
     """
-    if len(names) != len(positions):
-        raise ValueError(f'{len(names)} names but {len(positions)} positions')
+    rows = np.asarray(positions, dtype=float)
+    rows = rows.reshape(1, -1) if rows.ndim < 2 else rows
+    if rows.shape[1] != len(names):
+        raise ValueError(f'{len(names)} names but {rows.shape[1]} positions')
     index_of = {name: index for index, name in enumerate(limits.joints)}
-    position = limits.position
-    for name, value in zip(names, positions, strict=True):
-        index = index_of.get(name)
-        if index is None:
-            return (f"{what} names joint '{name}', which has no limits; known joints: "
-                    f'{list(limits.joints)}')
-        unit = limits.units[index]
-        value = float(value)
-        if not math.isfinite(value):
-            return f"{what} {value:g} {unit} for joint '{name}' is not finite"
-        lower, upper = position.lower[index], position.upper[index]
-        if lower <= value <= upper:
-            continue
-        bound = 'lower' if value < lower else 'upper'
-        source = (position.lower_source if bound == 'lower' else position.upper_source)[index]
-        return (f"{what} {value:g} {unit} for joint '{name}' is outside its range "
-                f'[{lower:g}, {upper:g}] {unit} ({bound} from {_describe_origin(source, bound)})')
-    return None
+    for name in names:
+        if name not in index_of:
+            return (f"{what.format(point=0)} names joint '{name}', which has no limits; "
+                    f'known joints: {list(limits.joints)}')
+    indices = np.array([index_of[name] for name in names], dtype=int)
+    lower, upper = limits.position.lower[indices], limits.position.upper[indices]
+    range_lower, range_upper = lower, upper
+    if start is not None:  # the range widened to the start
+        start = np.asarray(start, dtype=float)
+        lower, upper = np.minimum(lower, start), np.maximum(upper, start)
+    finite = np.isfinite(rows)
+    outside = ~finite | (rows < lower - POSITION_TOLERANCE * np.maximum(1.0, np.abs(lower))) \
+        | (rows > upper + POSITION_TOLERANCE * np.maximum(1.0, np.abs(upper)))
+    if not outside.any():
+        return None
+    point, column = (int(i) for i in np.argwhere(outside)[0])  # first point, first joint
+    index, value, label = indices[column], rows[point, column], what.format(point=point)
+    unit = limits.units[index]
+    if not finite[point, column]:
+        return f"{label} {value:g} {unit} for joint '{names[column]}' is not finite"
+    reason = (f"{label} {value:.6g} {unit} for joint '{names[column]}' is outside its range "
+              f'{describe_range(limits, index)}')
+    if lower[column] != range_lower[column] or upper[column] != range_upper[column]:
+        reason += (f'; it is at {start[column]:.6g} {unit}, outside its range: only positions '
+                   f'in [{lower[column]:.6g}, {upper[column]:.6g}] {unit} (toward or into '
+                   'its range) are allowed')
+    return reason

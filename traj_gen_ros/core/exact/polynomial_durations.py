@@ -153,9 +153,10 @@ def synchronised_duration(runs: np.ndarray, joints: int) -> float | None:
     return float(times[order][common[0]]) if common.size else None
 
 
-def minimum_duration(profile: str, displacement: np.ndarray, start_velocity: np.ndarray,
-                     start_acceleration: np.ndarray, max_velocity: np.ndarray,
-                     max_acceleration: np.ndarray) -> tuple[float | None, int | None]:
+def polynomial_minimum_duration(profile: str, displacement: np.ndarray,
+                                start_velocity: np.ndarray, start_acceleration: np.ndarray,
+                                max_velocity: np.ndarray, max_acceleration: np.ndarray
+                                ) -> tuple[float | None, int | None]:
     """
     Return the smallest common duration: ``(duration, None)``, or ``(None, joint)``.
 
@@ -288,7 +289,7 @@ def _onto_common_run(profile: str, moves: tuple, outside: float, inside: float) 
 
 def _common_duration(profile: str, moves: tuple,
                      joints: np.ndarray | None) -> tuple[float | None, int | None]:
-    """:func:`minimum_duration` over the given joints (``None``: all), analysed exactly."""
+    """:func:`polynomial_minimum_duration` over the given joints (``None``: all), exactly."""
     subset = moves if joints is None else tuple(values[joints] for values in moves)
     count = subset[0].size
     runs = feasible_runs(profile, subset)

@@ -24,6 +24,7 @@ from traj_gen_ros.core.trajectory import JerkLimitedTrajectory
 from traj_gen_ros.core.validation import ArrayLike
 
 
+@validation.refuses_overflow('scurve_brake')
 def scurve_brake(
     q0: ArrayLike,
     v0: ArrayLike,

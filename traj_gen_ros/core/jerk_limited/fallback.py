@@ -14,15 +14,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
+from traj_gen_ros.core.jerk_limited.problem import DURATION_TOLERANCE, Move
 from traj_gen_ros.core.trajectory import JerkLimitedTrajectory, Trajectory
-
-if TYPE_CHECKING:
-    from traj_gen_ros.core.jerk_limited.ruckig_backend import Move
-
-_DURATION_TOLERANCE = 1e-13  # as scurve_ruckig.DURATION_TOLERANCE
 
 
 def rest_to_rest(move: Move) -> tuple[Trajectory, float] | None:
@@ -87,11 +82,11 @@ def composed(move: Move, plan_move: Callable[[Move], tuple[Trajectory, float]]
     if any(move.vf) or (move.duration is None and joints == 1):
         return None
     try:
-        own = [plan_move(_minimum_time(move.joint(joint))) for joint in range(joints)]
+        own = [plan_move(move.joint(joint).minimum_time()) for joint in range(joints)]
     except ValueError:
         return None
     duration = move.duration or max(time for _, time in own)
-    if max(time for _, time in own) > duration * (1.0 + _DURATION_TOLERANCE):
+    if max(time for _, time in own) > duration * (1.0 + DURATION_TOLERANCE):
         return None
     columns = []
     for joint, (plan, time) in enumerate(own):
@@ -118,8 +113,3 @@ def composed(move: Move, plan_move: Callable[[Move], tuple[Trajectory, float]]
         table[:, :, joint] = hold  # zero-length padding at the end holds the goal
         table[:len(coefficients), :, joint] = coefficients
     return JerkLimitedTrajectory(breakpoints, table), duration
-
-
-def _minimum_time(move: Move) -> Move:
-    """Return ``move`` without its duration: the minimum-time problem."""
-    return type(move)(move.start, move.goal, move.v0, move.a0, move.vf, move.limits, None)

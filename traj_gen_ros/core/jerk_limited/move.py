@@ -23,17 +23,10 @@ so the other profiles do not need it.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from traj_gen_ros.core import validation
-from traj_gen_ros.core.jerk_limited.ruckig_backend import (
-    DURATION_TOLERANCE,
-    LIMIT_NAMES,
-    minimum_duration,
-    Move,
-    plan_move,
-)
+from traj_gen_ros.core.jerk_limited.problem import DURATION_TOLERANCE, LIMIT_NAMES, Move
+from traj_gen_ros.core.jerk_limited.ruckig_backend import plan_move, scurve_minimum_duration
 from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.core.validation import ArrayLike
 
@@ -69,6 +62,7 @@ def scurve_min_time(
     return plan_move(move)[0]
 
 
+@validation.refuses_overflow('scurve')
 def scurve(
     q0: ArrayLike,
     qf: ArrayLike,
@@ -117,10 +111,10 @@ def fixed_duration(move: Move, caller: str, what: str) -> Trajectory:
     trajectory, reached = plan_move(move)
     if reached <= move.duration * (1.0 + DURATION_TOLERANCE):
         return trajectory
-    fastest = minimum_duration(move)
+    fastest = scurve_minimum_duration(move)
     if fastest > move.duration * (1.0 + DURATION_TOLERANCE):
         raise ValueError(f'{caller}: {what} {move.duration:g} s is too short for the limits; '
-                         f'the minimum duration is {round_up(fastest)} s')
+                         f'the minimum duration is {validation.round_up(fastest, 9)} s')
     blocked = [joint for joint in range(len(move.start))
                if plan_move(move.joint(joint))[1] > move.duration * (1 + DURATION_TOLERANCE)]
     names = ('the joints together' if not blocked else
@@ -128,13 +122,5 @@ def fixed_duration(move: Move, caller: str, what: str) -> Trajectory:
              + ', '.join(str(joint) for joint in blocked))
     raise ValueError(f'{caller}: {what} {move.duration:g} s is in a blocked duration interval '
                      f'of {names} (from its start state it would stop short or overshoot); '
-                     f'the minimum duration is {round_up(fastest)} s and the next one that '
-                     f'works is {round_up(reached)} s')
-
-
-def round_up(value: float, digits: int = 9) -> str:
-    """``value`` rounded up to ``digits`` significant digits, so the printed number works."""
-    if not math.isfinite(value) or value <= 0.0:
-        return f'{value:g}'
-    scale = 10.0 ** (digits - 1 - math.floor(math.log10(value)))
-    return f'{math.ceil(value * scale * (1.0 - 1e-15)) / scale:.{digits}g}'
+                     f'the minimum duration is {validation.round_up(fastest, 9)} s and the next '
+                     f'one that works is {validation.round_up(reached, 9)} s')

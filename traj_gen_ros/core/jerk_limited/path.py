@@ -19,13 +19,9 @@ from typing import NamedTuple
 
 import numpy as np
 from traj_gen_ros.core import validation
-from traj_gen_ros.core.jerk_limited.move import fixed_duration, round_up
-from traj_gen_ros.core.jerk_limited.ruckig_backend import (
-    LIMIT_NAMES,
-    minimum_duration,
-    Move,
-    plan_move,
-)
+from traj_gen_ros.core.jerk_limited.move import fixed_duration
+from traj_gen_ros.core.jerk_limited.problem import LIMIT_NAMES, Move
+from traj_gen_ros.core.jerk_limited.ruckig_backend import plan_move, scurve_minimum_duration
 from traj_gen_ros.core.polynomial import heuristic_velocities
 from traj_gen_ros.core.trajectory import JerkLimitedTrajectory, Trajectory
 from traj_gen_ros.core.validation import ArrayLike
@@ -45,6 +41,7 @@ class Start(NamedTuple):
 REST = Start(0.0, 0.0)
 
 
+@validation.refuses_overflow('scurve_via')
 def scurve_via(
     points: ArrayLike,
     durations: ArrayLike,
@@ -209,7 +206,7 @@ def _validated(points: ArrayLike, durations: ArrayLike, max_velocity: ArrayLike,
     path = validation.path_points(points)
     durations = validation.segment_durations(durations, len(path) - 1)
     joints = path.shape[1]
-    limits = tuple(validation.positive_per_joint(name, value, joints) for name, value in
+    limits = tuple(validation.per_joint(name, value, joints) for name, value in
                    zip(LIMIT_NAMES, (max_velocity, max_acceleration, max_jerk), strict=True))
     if isinstance(velocities, str):
         if velocities != 'heuristic':
@@ -257,7 +254,7 @@ def _shortest(path: np.ndarray, via: np.ndarray, durations: np.ndarray, limits: 
               segment: int) -> float:
     """Return a segment's minimum time (s); a failure names the segment."""
     try:
-        return minimum_duration(_segment(path, via, durations, limits, segment))
+        return scurve_minimum_duration(_segment(path, via, durations, limits, segment))
     except ValueError as error:
         raise ValueError(f'scurve_via_durations: segment {segment} (points {segment} to '
                          f'{segment + 1}): {error}') from None
@@ -301,14 +298,14 @@ def _smallest_heuristic(path: np.ndarray, durations: np.ndarray, limits: tuple,
         if not validation.every(np.abs(via[segment:segment + 2]) <= limits[0]):
             break
         try:
-            shortest = minimum_duration(_segment(path, via, trial, limits, segment, start))
+            shortest = scurve_minimum_duration(_segment(path, via, trial, limits, segment, start))
         except ValueError:
             break
         if shortest <= 0.0:
             break
         trial[segment] = shortest
         if _segment_feasible(path, trial, limits, segment, start):
-            return f'{round_up(shortest)} s'
+            return f'{validation.round_up(shortest, 9)} s'
     low = high = float(durations[segment])
     for _ in range(_SCALE_STEPS):
         high *= 2.0
@@ -325,7 +322,7 @@ def _smallest_heuristic(path: np.ndarray, durations: np.ndarray, limits: tuple,
             high = trial[segment]
         else:
             low = trial[segment]
-    return f'{round_up(high)} s'
+    return f'{validation.round_up(high, 9)} s'
 
 
 def _concatenate(pieces: list[Trajectory], durations: np.ndarray) -> Trajectory:

@@ -25,42 +25,24 @@ import numpy as np
 import ruckig
 from traj_gen_ros.core import validation
 from traj_gen_ros.core.jerk_limited import fallback as scurve_fallback
+from traj_gen_ros.core.jerk_limited.problem import (
+    DURATION_TOLERANCE,
+    Floats,
+    LIMIT_NAMES,
+    Move,
+)
 from traj_gen_ros.core.trajectory import JerkLimitedTrajectory, Trajectory
 
 PHASES = 7  # jerk phases of one S-curve; braking adds two before them
-DURATION_TOLERANCE = 1e-13  # relative: a plan this close to the asked duration meets it
 _GOOD = (ruckig.Result.Working, ruckig.Result.Finished)
 _LIMIT_TOLERANCE = 1e-10  # relative: a Ruckig phase beyond a limit by more is refused
 _CHECKED_BELOW = 1e-2  # plans are checked against limits this small (in Ruckig's units)
 _SMALLEST_RATIO = 2.0**-20  # lowered limits stay above this fraction (cubed for jerk)
-LIMIT_NAMES = ('max_velocity', 'max_acceleration', 'max_jerk')
-
-Floats = list[float]
 
 
-class Move:
-    """One state-to-state problem as Python floats, one list entry per joint."""
-
-    __slots__ = ('start', 'goal', 'v0', 'a0', 'vf', 'limits', 'duration')
-
-    def __init__(self, start: Floats, goal: Floats, v0: Floats, a0: Floats, vf: Floats,
-                 limits: tuple[Floats, Floats, Floats], duration: float | None) -> None:
-        self.start, self.goal, self.v0, self.a0, self.vf = start, goal, v0, a0, vf
-        self.limits = limits  # (v_max, a_max, j_max)
-        self.duration = duration  # the exact duration asked for, or None for minimum time
-
-    def joint(self, index: int) -> Move:
-        """Return the same problem for one joint alone."""
-        pick = slice(index, index + 1)
-        return Move(self.start[pick], self.goal[pick], self.v0[pick], self.a0[pick],
-                    self.vf[pick], tuple(limit[pick] for limit in self.limits),
-                    self.duration)
-
-
-def minimum_duration(move: Move) -> float:
+def scurve_minimum_duration(move: Move) -> float:
     """Return the time-optimal synchronised duration (s) of ``move``, ignoring its own."""
-    return plan_move(Move(move.start, move.goal, move.v0, move.a0, move.vf, move.limits,
-                          None))[1]
+    return plan_move(move.minimum_time())[1]
 
 
 def plan_move(move: Move) -> tuple[Trajectory, float]:
@@ -78,7 +60,7 @@ def plan_move(move: Move) -> tuple[Trajectory, float]:
         elif needed is None or solved[1] <= needed * (1.0 + DURATION_TOLERANCE):
             return solved
     fallback = scurve_fallback.rest_to_rest(move) or scurve_fallback.composed(move, plan_move)
-    if fallback is not None:
+    if fallback is not None and _arrives(fallback[0], move):  # (a stretch may underflow)
         return fallback
     raise ValueError(_failure_message(move, reason))
 
@@ -116,9 +98,10 @@ def _stretched(move: Move) -> Iterator[tuple[Move, float]]:
     if it keeps ``T``.
     """
     if move.duration is None and len(move.start) == 1:
-        return  # nothing to stretch (and this is what minimum_duration below calls)
+        return  # nothing to stretch (what scurve_minimum_duration's own calls are)
     try:
-        own = [minimum_duration(move.joint(joint)) for joint in range(len(move.start))]
+        own = [scurve_minimum_duration(move.joint(joint))
+               for joint in range(len(move.start))]
     except ValueError:
         return
     duration = move.duration or max(own)
@@ -256,7 +239,7 @@ def _calculate(move: Move, time_scale: float,
     built = _build(solution.profiles[0], duration, k, scales, shifts, move, limits)
     if isinstance(built, str):
         return built
-    if position_scales is not None and max(scales) > 1.0 and not _arrives(built, move):
+    if not _arrives(built, move):  # (in extreme units Ruckig may miss the goal)
         return 'Ruckig is not precise enough in these units'
     return built, duration
 
@@ -266,8 +249,10 @@ def _arrives(trajectory: Trajectory, move: Move) -> bool:
     Tell whether a plan ends at the goal state as precisely as Ruckig does unscaled.
 
     Ruckig's precision is absolute (1e-8 in position and velocity); scaling positions by
-    ``s`` widens it by ``s``, so such a plan is kept only if it still arrives within
-    ``1e-8`` plus ``1e-9`` of the positions' or the limit's magnitude.
+    ``s`` widens it by ``s``, so a plan is kept only if it still arrives within ``1e-8``
+    plus ``1e-9`` of the positions' or the limit's magnitude (for the velocity, plus what
+    the resolution of its times allows: ``a_max · 4 ε · T``). Every plan is checked: in
+    extreme units a plan can miss its goal (a time-stretch whose coefficients vanish).
     """
     c0, c1, c2, c3 = trajectory.coefficients[-1]  # each joint's last piece, at its end
     with np.errstate(over='ignore', invalid='ignore'):  # scaled back: inf or NaN fails
@@ -275,9 +260,11 @@ def _arrives(trajectory: Trajectory, move: Move) -> bool:
         position = ((c3 * length + c2) * length + c1) * length + c0
         velocity = (3.0 * c3 * length + 2.0 * c2) * length + c1
         reach = np.maximum(np.maximum(np.abs(move.start), np.abs(move.goal)), 1.0)
+        resolution = 4.0 * np.finfo(float).eps * trajectory.duration
         return (validation.every(np.abs(position - move.goal) <= 1e-8 + 1e-9 * reach)
                 and validation.every(np.abs(velocity - move.vf)
-                                     <= 1e-8 + 1e-9 * np.asarray(move.limits[0])))
+                                     <= 1e-8 + 1e-9 * np.asarray(move.limits[0])
+                                     + np.asarray(move.limits[1]) * resolution))
 
 
 def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Floats,
@@ -319,8 +306,9 @@ def _build(profiles: list, duration: float, k: float, scales: Floats, shifts: Fl
         breakpoints = np.empty((len(table) + 1, len(profiles)))
         breakpoints[0] = 0.0
         np.minimum(np.cumsum(table[:, 4], axis=0), duration, out=breakpoints[1:])
-    else:  # scaled units: the products may overflow, then the plan is refused below
-        with np.errstate(over='ignore', invalid='ignore'):
+    else:  # scaled units: the products may overflow (or k³ underflow to 0), then the
+        # plan is refused below
+        with np.errstate(over='ignore', divide='ignore', invalid='ignore'):
             divisors = np.array([[1.0], [k], [2.0 * k * k], [6.0 * k * k * k]])
             table[:, :4] *= np.array(scales) / divisors
             table[:, 0] += shifts
