@@ -236,11 +236,11 @@ def test_defaults_keep_the_urdf_and_no_urdf_leaves_the_parameters(arm_limits):
     ({'max_velocity': [1.0, 2.0]},
      r'^max_velocity has 2 values but there are 3 joints: give one value for all joints or '),
     ({'min_position': [0.0, math.nan, 0.0]},
-     r'^min_position must be a number, not NaN \(\+-inf: no limit\); joint 1 has nan$'),
+     r"^min_position must be a number, not NaN \(\+-inf: no limit\); joint 'joint_2' has nan$"),
     ({'min_position': INF}, r'^min_position cannot be \+inf nor max_position -inf'),
     ({'max_position': -INF}, r'^min_position cannot be \+inf nor max_position -inf'),
     ({'max_velocity': [1.0, 0.0, 1.0]},
-     r'^max_velocity must be > 0 \(inf: no limit\); joint 1 has 0.0$'),
+     r"^max_velocity must be > 0 \(inf: no limit\); joint 'joint_2' has 0.0$"),
     ({'min_position': [3.0, 0.0, 0.0]},
      r"^joint 'joint_1' has no valid position: the URDF allows \[-2.9, 2.9\] rad and the "
      r'parameters \[3, inf\] rad$'),
