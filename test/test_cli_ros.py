@@ -20,8 +20,9 @@ import numpy as np
 import pytest
 from test_cli import assert_one_line_error, legend_covers, marks_of
 from traj_gen_ros.cli.common import joint_names
-from traj_gen_ros.cli.ros import goal_from_args, topic_figure, via_from_args
+from traj_gen_ros.cli.ros import goal_from_args, topic_figure, via_from_args, via_marks
 from traj_gen_ros.node.parameters import DEFAULT_JOINTS
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 TIMEOUT = 120  # s per command: generous, the machine is shared
 
@@ -147,6 +148,36 @@ def test_via_passes_the_points_then_plot_topic_records_the_plan(probe, rest, tmp
     info = json.loads(result.stdout)
     assert info['joints'] == len(JOINTS) and len(info['panels']) == 3
     assert mpimg.imread(output).shape[:2] == (720, 640)
+
+
+def test_via_plot_marks_the_points_sent_on_the_nodes_plan(probe, rest, tmp_path):
+    output = tmp_path / 'via.png'
+    result = traj_gen('via', '--joints', 'joint_1', 'joint_3', '--point', '0.3', '-0.2', '@1',
+                      '--point', '0.1', '0.2', '@2', '--plot', str(output), '--size', '700x800',
+                      '--timeout', '30')
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[0].startswith('OK: accepted') and lines[1].startswith(f'wrote {output} ')
+    assert mpimg.imread(output).shape[:2] == (800, 700)
+
+    # What the plot marks, from the node's plan as the probe received it.
+    plan = probe.spin_until(lambda: next(
+        (t for t in reversed(probe.trajectories) if t.points
+         and list(t.points[-1].positions)[2] == pytest.approx(0.2)), None), 30, 'the plan')
+    request = JointTrajectory(joint_names=['joint_1', 'joint_3'], points=[
+        JointTrajectoryPoint(positions=[0.3, -0.2]), JointTrajectoryPoint(positions=[0.1, 0.2])])
+    times, positions, _, _ = trajectory_arrays(plan)
+    mark_times, mark_positions = via_marks(times, positions, list(plan.joint_names), request)
+    assert mark_times == pytest.approx([0.0, 1.0, 2.0], abs=1e-9)  # 1 s is a sample at 100 Hz
+    assert mark_positions[1, [0, 2]] == pytest.approx([0.3, -0.2], abs=1e-12)
+    assert mark_positions[1, 1] == pytest.approx(positions[100, 1])  # unnamed: the plan's
+    figure = topic_figure(plan, '/trajectory_generator/trajectory', False, (700, 800),
+                          request=request)
+    try:
+        assert marks_of(figure, 'via points')[0] == [[1.0]] * len(JOINTS)  # one per joint
+        assert legend_covers(figure) == []
+    finally:
+        plt.close(figure)
 
 
 def test_via_refusal_exits_1_with_the_reason(probe, rest):

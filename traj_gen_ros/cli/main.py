@@ -233,6 +233,12 @@ def add_ros_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--degrees', action='store_true',
                         help='positions in degrees (sent in radians)')
     parser.add_argument('--json', action='store_true', help='print the status as JSON')
+    parser.add_argument('--plot', metavar='FILE.png',
+                        help="after acceptance, plot the node's plan of this request (its "
+                             '~/trajectory) with the points sent marked: start and goal as '
+                             'circles, via points as diamonds')
+    parser.add_argument('--size', type=positive_size, default=(900, 900), metavar='WxH',
+                        help='--plot: image size in pixels (default 900x900)')
 
 
 # ---------------------------------------------------------------------------- planning
@@ -292,6 +298,8 @@ def _plot_title(plan: Plan) -> str:
 
 def run_ros(args: argparse.Namespace) -> int:
     """``traj-gen goal`` / ``traj-gen via``: send a request to a running node."""
+    if args.plot:
+        require_plotting()  # before waiting for ROS: a missing matplotlib is said at once
     from traj_gen_ros.cli import ros as cli_ros
     return cli_ros.run_request(args)
 

@@ -205,11 +205,16 @@ def run_request(args: argparse.Namespace) -> int:
         if args.wait:
             ros.create_subscription(JointState, args.joint_states or joint_states_topic(node),
                                     states.append, _reliable(10))
+        plans: list = []
+        if args.plot:
+            ros.create_subscription(JointTrajectory, f'{node}/trajectory', plans.append,
+                                    _reliable(1, transient_local=True))
         session.wait(lambda: publisher.get_subscription_count() > 0
                      and status_sub.get_publisher_count() > 0, args.timeout,
                      f'{node} is not subscribed to {node}/{kind} (is the node running, '
                      'with the same ROS_DOMAIN_ID?)')
         seen = len(statuses)
+        sent_ns = time.time_ns()
         publisher.publish(message)
 
         def ours(status: object) -> bool:
@@ -231,9 +236,36 @@ def run_request(args: argparse.Namespace) -> int:
             print(f"{status['level']}: {status['message']}")
         if status['level'] != 'OK':
             return EXIT_REFUSED
+        if args.plot:
+            _plot_plan(session, plans, sent_ns, message, args)
         if args.wait:
             _wait_for_end(session, states, status, names, targets, args.timeout)
     return EXIT_OK
+
+
+def _plot_plan(session: _Session, plans: list, sent_ns: int, message: object,
+               args: argparse.Namespace) -> None:
+    """
+    ``--plot``: write the node's plan of ``message`` with the points sent marked.
+
+    The plan is the first ``~/trajectory`` stamped after the request was sent (the node
+    stamps it with its start tick, on the system clock unless ``use_sim_time``); an older
+    plan, latched on the topic, is not it.
+    """
+    from traj_gen_ros.cli import plot as plotting  # matplotlib: loaded only when a plot is made
+
+    def ours() -> object:
+        return next((plan for plan in plans if _stamp_ns(plan.header.stamp) >= sent_ns), None)
+
+    plan = session.wait(ours, args.timeout, f'no {node_name(args.node)}/trajectory for the '
+                        'request')
+    figure = topic_figure(plan, f'{node_name(args.node)}/trajectory', args.degrees, args.size,
+                          request=message)
+    report_plot(plotting.write_png(figure, args.plot, len(plan.joint_names)), args.json)
+
+
+def _stamp_ns(stamp: object) -> int:
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
 def _wait_for_end(session: _Session, states: list, status: dict, names: list[str],
@@ -277,22 +309,54 @@ def run_plot_topic(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def topic_figure(message: object, topic: str, degrees: bool, size: tuple[int, int]) -> Figure:
+def topic_figure(message: object, topic: str, degrees: bool, size: tuple[int, int],
+                 request: object | None = None) -> Figure:
     """
-    Return the figure ``plot --topic`` writes of a JointTrajectory received on ``topic``.
+    Return the figure of a JointTrajectory received on ``topic`` (``plot --topic``).
 
-    Its start and end are marked; the message holds samples only, not the points of the
-    request it was planned from.
+    Its start and end are marked. The message holds samples only, not the points of the
+    request it was planned from; given that ``request`` (the ``JointTrajectory`` of via
+    points sent, as ``traj-gen via --plot`` does), each of its points is marked too, at the
+    time the plan comes closest to it (:func:`via_marks`).
     """
     from traj_gen_ros.cli import plot as plotting  # matplotlib: loaded only when a plot is made
 
     times, positions, velocities, accelerations = trajectory_arrays(message)
     scale = 180.0 / math.pi if degrees else 1.0
+    marks = (times[[0, -1]], positions[[0, -1]])
+    if isinstance(request, JointTrajectory) and request.points:
+        marks = via_marks(times, positions, list(message.joint_names), request)
     return plotting.draw_samples(
         times, positions * scale, velocities * scale, accelerations * scale,
-        unit='deg' if degrees else 'rad', marks=(times[[0, -1]], positions[[0, -1]] * scale),
+        unit='deg' if degrees else 'rad', marks=(marks[0], marks[1] * scale),
         size=size, title=f'{topic}: {len(times)} points, {times[-1]:.3g} s',
         joint_names=list(message.joint_names))
+
+
+def via_marks(times: np.ndarray, positions: np.ndarray, joints: list[str], request: object
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return the start, the request's via points and the end as ``(times, positions)`` marks.
+
+    Each point sent but the last (the goal: the plan's end) is marked at its own positions (the joints it names; the others at the
+    plan's there), at the sample where the plan comes closest to it after the previous
+    one: where a profile passes through its via points that is their time; where it
+    rounds them (LSPB's blends, Craig 7.3) the mark shows by how much. Units: s, rad.
+    """
+    columns = [joints.index(name) for name in request.joint_names]
+    mark_times, mark_positions = [times[0]], [positions[0]]
+    first = 0
+    for point in request.points[:-1]:
+        wanted = np.asarray(point.positions, dtype=float)
+        distance = np.abs(positions[first:, columns] - wanted).max(axis=1)
+        first += int(np.argmin(distance))
+        marked = positions[first].copy()
+        marked[columns] = wanted
+        mark_times.append(times[first])
+        mark_positions.append(marked)
+    mark_times.append(times[-1])
+    mark_positions.append(positions[-1])
+    return np.array(mark_times), np.array(mark_positions)
 
 
 def trajectory_arrays(message: object
