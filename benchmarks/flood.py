@@ -49,22 +49,6 @@ def rss_kib(pid: int) -> int:
     raise RuntimeError(f'no VmRSS for {pid}')
 
 
-def node_pid(parent: int | None = None, marker: bytes = b'generator_node') -> int:
-    """Pid of the child of ``parent`` (default: this process) whose command has ``marker``."""
-    parent = os.getpid() if parent is None else parent
-    for entry in Path('/proc').iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            ppid = int((entry / 'stat').read_text().rsplit(')', 1)[1].split()[1])
-            command = (entry / 'cmdline').read_bytes()
-        except (OSError, IndexError, ValueError):
-            continue
-        if ppid == parent and marker in command:
-            return int(entry.name)
-    raise RuntimeError(f'no child process of {parent} running {marker!r}')
-
-
 def answered(status: DiagnosticStatus) -> dict:
     """Map each request a status answers (by frame_id) to (status, request_id)."""
     values = {kv.key: kv.value for kv in status.values}
