@@ -27,6 +27,8 @@ Interface (all names relative, so namespaces and remapping work):
 * ``~/goal`` (``sensor_msgs/JointState``), ``~/via_points`` (``trajectory_msgs/JointTrajectory``).
 * ``~/stop`` (``std_srvs/Trigger``): brake within ``max_acceleration`` (and ``max_jerk``
   with profile ``scurve``) and hold.
+* ``~/follow_joint_trajectory`` (``control_msgs/action/FollowJointTrajectory``), where
+  control_msgs is importable: :mod:`traj_gen_ros.node.follow_joint_trajectory`.
 * ``robot_description`` (``std_msgs/String``, transient local): the robot's URDF, in.
 * ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): the node's health, about 1 Hz.
 """
@@ -52,6 +54,7 @@ from std_srvs.srv import Trigger
 from traj_gen_ros.node.config import Config, initial_state, make_config
 from traj_gen_ros.node.diagnostics import RateMeter
 from traj_gen_ros.node.diagnostics_publisher import CountingAnswers, NodeDiagnostics
+from traj_gen_ros.node.follow_joint_trajectory import create_server
 from traj_gen_ros.node.motion import held
 from traj_gen_ros.node.parameters import declare_parameters
 from traj_gen_ros.node.realtime import (
@@ -113,6 +116,10 @@ class TrajectoryGenerator(Node):
             self.context, [self._goal_subscription, self._via_subscription],
             self.get_logger().error)
         self.create_service(Trigger, '~/stop', self._on_stop)
+        # ~/follow_joint_trajectory where control_msgs is importable (follow_joint_trajectory)
+        self.follow_joint_trajectory = create_server(
+            self, self._requests, self._stream, self._answers, lambda: self._config,
+            self._now_ns)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._diagnostics = NodeDiagnostics(self, lambda: self._config, self._limits,
