@@ -7,18 +7,23 @@ from traj_gen_ros.node.config import make_config
 from traj_gen_ros.node.motion import State
 from traj_gen_ros.node.trajectory_goal import (
     check_stamp,
+    GOAL_TOLERANCE_VIOLATED,
     GoalError,
     INVALID_GOAL,
     INVALID_JOINTS,
     OLD_HEADER_TIMESTAMP,
     parse_trajectory_goal,
+    PATH_TOLERANCE_VIOLATED,
     plan_trajectory_goal,
 )
 from traj_gen_ros.node.trajectory_tolerances import (
+    ABORTED,
     default_tolerances,
     goal_tolerances,
     goal_violation,
+    outcome,
     path_violation,
+    SUCCEEDED,
 )
 
 JOINTS = ('a', 'b', 'c')
@@ -163,3 +168,31 @@ def test_tolerances_follow_jtc():
     with pytest.raises(GoalError) as raised:
         goal_tolerances(defaults, JOINTS, [], [('a', -2.0)], 0.0)
     assert raised.value.code == INVALID_GOAL and "joint 'a' is -2.0" in str(raised.value)
+
+
+def test_outcome_of_a_running_goal():
+    tolerances = default_tolerances(3, [0.1], [0.02], 0.25, 0.01)
+    named, desired, target = np.array([0, 1]), np.zeros(3), np.array([0.5, 0.5, 0.0])
+    start, end = 0, 2_000_000_000
+    still = lambda: np.zeros(3)  # noqa: E731
+    # Without a measured state: success once the end is published, with the slow-down.
+    assert outcome(tolerances, named, JOINTS, (start, end, end - 1, end - 1), desired, target,
+                   None, still, '') is None
+    assert outcome(tolerances, named, JOINTS, (start, end, end, end), desired, target, None,
+                   still, 'slowed by a factor of 1.03') == (SUCCEEDED, 0, 'slowed by a '
+                                                             'factor of 1.03')
+    # Beyond path_tolerance during the motion.
+    status, code, text = outcome(tolerances, named, JOINTS, (start, end, 1, 1), desired,
+                                 target, np.array([0.0, 0.2, 0.0]), still, '')
+    assert (status, code) == (ABORTED, PATH_TOLERANCE_VIOLATED) and "'b'" in text
+    # At the end: within goal_tolerance and still, or not yet, or too late.
+    near = target + [0.01, -0.01, 0.0]
+    assert outcome(tolerances, named, JOINTS, (start, end, end, end), desired, target, near,
+                   still, '')[:2] == (SUCCEEDED, 0)
+    far = target + [0.05, 0.0, 0.0]
+    assert outcome(tolerances, named, JOINTS, (start, end, end + 10**8, end), desired,
+                   target, far, still, '') is None
+    status, code, text = outcome(tolerances, named, JOINTS, (start, end, end + 3 * 10**8, end),
+                                 desired, target, far, still, '')
+    assert (status, code) == (ABORTED, GOAL_TOLERANCE_VIOLATED)
+    assert "joint 'a' is at 0.55 rad, 0.05 rad from 0.5 rad: above goal_tolerance 0.02" in text

@@ -50,7 +50,6 @@ from traj_gen_ros.node.request_handler import brake_planner, RequestHandler
 from traj_gen_ros.node.stream import Stream
 from traj_gen_ros.node.trajectory_goal import (
     check_stamp,
-    GOAL_TOLERANCE_VIOLATED,
     GoalError,
     INVALID_GOAL,
     parse_trajectory_goal,
@@ -60,10 +59,12 @@ from traj_gen_ros.node.trajectory_goal import (
     TrajectoryGoal,
 )
 from traj_gen_ros.node.trajectory_tolerances import (
+    ABORTED,
+    CANCELED,
     default_tolerances,
     goal_tolerances,
-    goal_violation,
-    path_violation,
+    outcome,
+    SUCCEEDED,
     Tolerances,
 )
 from trajectory_msgs.msg import JointTrajectoryPoint
@@ -84,7 +85,6 @@ TOLERANCE_PARAMETERS = ('allowed_start_tolerance', 'goal_time_tolerance',
                         'stopped_velocity_tolerance', 'path_tolerance', 'goal_tolerance')
 _REPLACED_BY = {'goal': 'a ~/goal request', 'via_points': 'a ~/via_points request',
                 'stop': 'a ~/stop call', KIND: 'a newer follow_joint_trajectory goal'}
-SUCCEEDED, ABORTED, CANCELED = 'succeeded', 'aborted', 'canceled'
 
 
 def _seconds(duration: object) -> float:
@@ -320,47 +320,22 @@ class FollowJointTrajectoryServer:
         desired, _ = self._stream.start_state(now_ns)
         measured = self.measured_positions()
         self._feedback(active, now_ns, desired, measured)
-        named, joints = active.goal.request.joints, self._config().joints
-        if measured is not None and active.start_ns <= now_ns < active.end_ns:
-            problem = path_violation(active.tolerances, named, desired.position, measured,
-                                     joints)
-            if problem is not None:
-                self._finish(active, ABORTED, PATH_TOLERANCE_VIOLATED, problem)
+        ended = outcome(active.tolerances, active.goal.request.joints, self._config().joints,
+                        (active.start_ns, active.end_ns, now_ns, published_ns),
+                        desired.position, active.target, measured,
+                        self.measured_velocities, active.goal.slowed)
+        if ended is not None:
+            self._finish(active, *ended)
+            if ended[1] == PATH_TOLERANCE_VIOLATED:
                 self.reseed_to_measured()
-                return
-        if published_ns < active.end_ns:
-            return
-        slowed = active.goal.slowed
-        if measured is None:
-            self._finish(active, SUCCEEDED, SUCCESSFUL, slowed)
-            return
-        problem = goal_violation(active.tolerances, named, active.target, measured,
-                                 self.measured_velocities(), joints)
-        if problem is None:
-            self._finish(active, SUCCEEDED, SUCCESSFUL, slowed)
-        elif active.tolerances.goal_time > 0.0 and \
-                now_ns > active.end_ns + active.tolerances.goal_time * 1e9:
-            self._finish(active, ABORTED, GOAL_TOLERANCE_VIOLATED,
-                         f'{problem} {active.tolerances.goal_time:g} s after the end'
-                         f'{"; " + slowed if slowed else ""}')
 
     def _feedback(self, active: ActiveGoal, now_ns: int, desired: State,
                   measured: np.ndarray | None) -> None:
         if now_ns - active.feedback_ns < self._config().period_ns:
             return
         active.feedback_ns = now_ns
-        named = active.goal.request.joints
-        actual = desired.position if measured is None else measured
-        feedback = FollowJointTrajectory.Feedback(joint_names=list(active.goal.names))
-        feedback.header.stamp.sec, feedback.header.stamp.nanosec = divmod(now_ns, 1_000_000_000)
-        feedback.desired = JointTrajectoryPoint(
-            positions=desired.position[named].tolist(),
-            velocities=desired.velocity[named].tolist(),
-            accelerations=desired.acceleration[named].tolist())
-        feedback.actual = JointTrajectoryPoint(positions=actual[named].tolist())
-        feedback.error = JointTrajectoryPoint(
-            positions=(desired.position[named] - actual[named]).tolist())
-        active.handle.publish_feedback(feedback)
+        active.handle.publish_feedback(feedback_message(
+            active.goal.names, active.goal.request.joints, now_ns, desired, measured))
 
     def _finish(self, active: ActiveGoal, status: str, code: int, text: str) -> None:
         with self._lock:
@@ -390,6 +365,22 @@ class FollowJointTrajectoryServer:
         """Never scheduled (:meth:`_end` gives each goal its own): abort."""
         handle.abort()
         return FollowJointTrajectory.Result(error_code=INVALID_GOAL, error_string='internal')
+
+
+def feedback_message(names: tuple[str, ...], named: np.ndarray, now_ns: int, desired: State,
+                     measured: np.ndarray | None) -> object:
+    """Return the feedback: the goal's joints, the setpoint, the measured state, the error."""
+    actual = desired.position if measured is None else measured
+    feedback = FollowJointTrajectory.Feedback(joint_names=list(names))
+    feedback.header.stamp.sec, feedback.header.stamp.nanosec = divmod(now_ns, 1_000_000_000)
+    feedback.desired = JointTrajectoryPoint(
+        positions=desired.position[named].tolist(),
+        velocities=desired.velocity[named].tolist(),
+        accelerations=desired.acceleration[named].tolist())
+    feedback.actual = JointTrajectoryPoint(positions=actual[named].tolist())
+    feedback.error = JointTrajectoryPoint(
+        positions=(desired.position[named] - actual[named]).tolist())
+    return feedback
 
 
 def create_server(node: Node, handler: RequestHandler, stream: Stream, answers: Answers,

@@ -15,16 +15,25 @@ Units: rad, rad/s, s.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 import math
 
 import numpy as np
 from traj_gen_ros.node.config import per_joint
-from traj_gen_ros.node.trajectory_goal import GoalError, INVALID_GOAL, INVALID_JOINTS
+from traj_gen_ros.node.trajectory_goal import (
+    GOAL_TOLERANCE_VIOLATED,
+    GoalError,
+    INVALID_GOAL,
+    INVALID_JOINTS,
+    PATH_TOLERANCE_VIOLATED,
+    SUCCESSFUL,
+)
 
 #: A ``JointTolerance`` value that turns the check off for that joint.
 NOT_CHECKED = -1.0
+#: How a goal ends.
+SUCCEEDED, ABORTED, CANCELED = 'succeeded', 'aborted', 'canceled'
 
 
 @dataclass(frozen=True)
@@ -121,3 +130,33 @@ def _beyond(limit: np.ndarray, named: np.ndarray, wanted: np.ndarray, actual: np
     joint = int(named[worst])
     return (f'joint {joints[joint]!r} is at {actual[joint]:.6g} rad, {errors[worst]:.6g} rad '
             f'from {wanted[joint]:.6g} rad: above {field} {limits[worst]:g} rad')
+
+
+def outcome(tolerances: Tolerances, named: np.ndarray, joints: Sequence[str],
+            times_ns: tuple[int, int, int, int], desired: np.ndarray, target: np.ndarray,
+            measured: np.ndarray | None, measured_velocities: Callable[[], np.ndarray | None],
+            slowed: str) -> tuple[str, int, str] | None:
+    """
+    Say how a running goal ends now, ``(status, error code, error string)``, or None.
+
+    ``times_ns`` are its start and end, now and the last setpoint published (ns, node
+    clock); ``desired`` the setpoint now and ``target`` the end (rad); ``measured`` where
+    the arm is (rad) or None. ``slowed`` (the slow-down, if any) goes into the text.
+    """
+    start_ns, end_ns, now_ns, published_ns = times_ns
+    if measured is not None and start_ns <= now_ns < end_ns:
+        problem = path_violation(tolerances, named, desired, measured, joints)
+        if problem is not None:
+            return ABORTED, PATH_TOLERANCE_VIOLATED, problem
+    if published_ns < end_ns:
+        return None
+    if measured is None:
+        return SUCCEEDED, SUCCESSFUL, slowed
+    problem = goal_violation(tolerances, named, target, measured, measured_velocities(),
+                             joints)
+    if problem is None:
+        return SUCCEEDED, SUCCESSFUL, slowed
+    if tolerances.goal_time > 0.0 and now_ns > end_ns + tolerances.goal_time * 1e9:
+        return (ABORTED, GOAL_TOLERANCE_VIOLATED, f'{problem} {tolerances.goal_time:g} s '
+                f'after the end{"; " + slowed if slowed else ""}')
+    return None
