@@ -178,9 +178,9 @@ def test_outcome_of_a_running_goal():
     # Without a measured state: success once the end is published, with the slow-down.
     assert outcome(tolerances, named, JOINTS, (start, end, end - 1, end - 1), desired, target,
                    None, still, '') is None
+    slowed = 'slowed by a factor of 1.03'
     assert outcome(tolerances, named, JOINTS, (start, end, end, end), desired, target, None,
-                   still, 'slowed by a factor of 1.03') == (SUCCEEDED, 0, 'slowed by a '
-                                                             'factor of 1.03')
+                   still, slowed) == (SUCCEEDED, 0, slowed)
     # Beyond path_tolerance during the motion.
     status, code, text = outcome(tolerances, named, JOINTS, (start, end, 1, 1), desired,
                                  target, np.array([0.0, 0.2, 0.0]), still, '')
