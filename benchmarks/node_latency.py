@@ -296,7 +296,7 @@ def action_goal(recorder: Recorder, client, start: np.ndarray, target: np.ndarra
 
 
 def action_rows(recorder: Recorder, repeats: int) -> dict:
-    """Action goals from rest (each waited out) and preempting (0.1-0.12 s in)."""
+    """Time action goals from rest (each waited out) and continuing (0.1-0.12 s in)."""
     client = ActionClient(recorder, FollowJointTrajectory, f'{GENERATOR}/follow_joint_trajectory')
     recorder.spin_until(client.server_is_ready)
     rest, preempting = [], []
