@@ -9,6 +9,10 @@ that only stores the position, published at the next tick: the floor for "one pe
   published it, and when it arrived here) and request -> ``~/trajectory`` received, p50/p99
   over ``--repeats`` goals, from rest and preempting a moving arm, per profile, at 100 and
   500 Hz; and request -> full 1001-point ``~/trajectory`` (via point 10 s away, 100 Hz).
+* ``~/follow_joint_trajectory`` goal sent -> first ``joint_states`` of the new motion
+  (10-point positions-only goals, from rest and as continuation goals 0.1 s into the
+  previous one), at 100 and 500 Hz, beside the ``~/goal`` rows (where control_msgs is
+  importable; judged from sending: the action's arrival at the node is not reported);
 * the 500 Hz ``joint_states`` period (stamps) p50/p99/max: idle, under a 1 kHz goal flood
   (benchmarks/flood.py's flooder), and beside one busy process per core; the bare timer
   idle and beside the busy processes.
@@ -50,6 +54,12 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E
 from rclpy.serialization import deserialize_message  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint  # noqa: E402
+
+try:
+    from control_msgs.action import FollowJointTrajectory  # noqa: E402
+    from rclpy.action import ActionClient  # noqa: E402
+except ImportError:  # no control_msgs: no action rows
+    FollowJointTrajectory = None
 
 # node_harness picked a domain from this pid; the --bare child keeps its parent's.
 os.environ['ROS_DOMAIN_ID'] = os.environ.setdefault('NODE_LATENCY_DOMAIN',
@@ -253,6 +263,69 @@ def preempting(recorder: Recorder, repeats: int) -> dict:
     return summary(rows)
 
 
+def setpoint(recorder: Recorder) -> np.ndarray:
+    """Return the last setpoint received (rad)."""
+    return np.array(deserialize_message(recorder.states[-1][2], JointState).position)
+
+
+def action_goal(recorder: Recorder, client, start: np.ndarray, target: np.ndarray,
+                first_time: float) -> tuple:
+    """Send a 10-point goal from ``start`` to ``target``; ms to its first joint_states."""
+    times = first_time + np.arange(10) * 0.1
+    shares = np.linspace(0.0, 1.0, 10) if first_time == 0.0 else np.linspace(0.1, 1.0, 10)
+    message = JointTrajectory(joint_names=JOINTS)
+    for time_from_start, share in zip(times, shares, strict=True):
+        seconds = int(time_from_start)
+        message.points.append(JointTrajectoryPoint(
+            positions=(start + share * (target - start)).tolist(), time_from_start=Duration(
+                sec=seconds, nanosec=int(round((time_from_start - seconds) * 1e9)))))
+    count = len(recorder.trajectories)
+    first_state = len(recorder.states)
+    sent = time.time_ns()
+    future = client.send_goal_async(FollowJointTrajectory.Goal(trajectory=message))
+    recorder.spin_until(future.done)
+    result = future.result().get_result_async()
+    recorder.spin_until(lambda: len(recorder.trajectories) > count or result.done())
+    if len(recorder.trajectories) == count:
+        raise RuntimeError(f'action goal refused: {result.result().result.error_string}')
+    start_ns = stamp_of(recorder.trajectories[-1][1])
+    recorder.spin_until(lambda: any(row[1] > start_ns for row in recorder.states[first_state:]))
+    row = next(row for row in recorder.states[first_state:] if row[1] > start_ns)
+    recorder.spin_until(future.done)
+    return (row[1] - sent) * 1e-6, (row[0] - sent) * 1e-6, future.result()
+
+
+def action_rows(recorder: Recorder, repeats: int) -> dict:
+    """Time action goals from rest (each waited out) and continuing (0.1-0.12 s in)."""
+    client = ActionClient(recorder, FollowJointTrajectory, f'{GENERATOR}/follow_joint_trajectory')
+    recorder.spin_until(client.server_is_ready)
+    rest, preempting = [], []
+    try:
+        recorder.wait_at_rest()
+        action_goal(recorder, client, setpoint(recorder), np.zeros(6), 0.1)  # warm up
+        for index in range(repeats):
+            recorder.wait_at_rest()
+            recorder.spin_for(random.random() * 0.02)
+            here = setpoint(recorder)  # the first point (time 0) is where the arm is
+            published, received, handle = action_goal(
+                recorder, client, here, here + (0.05 if index % 2 == 0 else -0.05), 0.0)
+            result = handle.get_result_async()
+            recorder.spin_until(result.done)
+            rest.append((published, received))
+        recorder.wait_at_rest()
+        for _ in range(repeats):  # continuation goals, from where the setpoint is
+            here = setpoint(recorder)
+            target = here + 0.2  # on in the same direction, as MoveIt's continuations go
+            preempting.append(action_goal(recorder, client, here, target, 0.1)[:2])
+            recorder.spin_for(0.1 + random.random() * 0.02)
+        recorder.wait_at_rest()
+    finally:
+        client.destroy()
+    return {name: {'first_state_published_ms': percentiles([r[0] for r in rows]),
+                   'first_state_received_ms': percentiles([r[1] for r in rows])}
+            for name, rows in (('from_rest', rest), ('preempting', preempting))}
+
+
 def summary(rows) -> dict:
     published, received, trajectory, after_arrival, planning, attempts = zip(*rows,
                                                                              strict=True)
@@ -320,6 +393,9 @@ def reaction(args: argparse.Namespace, results: dict) -> None:
             if rate == 100.0:
                 recorder.set_parameters(profile='quintic')
                 results['via_1001_points_100hz'] = long_plan(recorder, args.repeats)
+            if FollowJointTrajectory is not None:
+                for name, row in action_rows(recorder, args.repeats).items():
+                    results[f'action_{name}_{rate:g}hz'] = row
         finally:
             stop(process)
             recorder.destroy_node()
@@ -394,6 +470,10 @@ def targets(results: dict) -> dict:
             period = 10.0 if key.split('_')[-2] == '100hz' else 2.0
             published = entry['first_state_after_arrival_ms']
             met[key] = published['p50'] <= period + 2.0 and published['p99'] <= 2 * period
+        if key.startswith('action_'):  # judged from sending (arrival is not reported)
+            period = 10.0 if key.endswith('_100hz') else 2.0
+            published = entry['first_state_published_ms']
+            met[key] = published['p50'] <= period + 2.0 and published['p99'] <= 2 * period
     if 'via_1001_points_100hz' in results:
         met['via_1001_points_within_25ms'] = \
             results['via_1001_points_100hz']['trajectory_received_ms']['p99'] <= 25.0
@@ -405,7 +485,7 @@ def report(results: dict) -> None:
           '-> ~/trajectory received; request arrived at the node -> first new joint_states '
           'published; ms p50/p99:')
     for key, entry in results.items():
-        if key.startswith(('from_rest', 'preempting', 'bare', 'via')):
+        if key.startswith(('from_rest', 'preempting', 'bare', 'via', 'action')):
             cells = [f'{name.replace("_ms", "")} {value["p50"]:.2f}/{value["p99"]:.2f}'
                      for name, value in entry.items()]
             print(f'  {key:<28} ' + '; '.join(cells))

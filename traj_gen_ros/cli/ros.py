@@ -338,10 +338,11 @@ def via_marks(times: np.ndarray, positions: np.ndarray, joints: list[str], reque
     """
     Return the start, the request's via points and the end as ``(times, positions)`` marks.
 
-    Each point sent but the last (the goal: the plan's end) is marked at its own positions (the joints it names; the others at the
-    plan's there), at the sample where the plan comes closest to it after the previous
-    one: where a profile passes through its via points that is their time; where it
-    rounds them (LSPB's blends, Craig 7.3) the mark shows by how much. Units: s, rad.
+    Each point sent but the last (the goal: the plan's end) is marked at its own
+    positions (the joints it names; the others at the plan's there), at the sample where
+    the plan comes closest to it after the previous one: where a profile passes through
+    its via points that is their time; where it rounds them (LSPB's blends, Craig 7.3)
+    the mark shows by how much. Units: s, rad.
     """
     columns = [joints.index(name) for name in request.joint_names]
     mark_times, mark_positions = [times[0]], [positions[0]]

@@ -27,6 +27,8 @@ Interface (all names relative, so namespaces and remapping work):
 * ``~/goal`` (``sensor_msgs/JointState``), ``~/via_points`` (``trajectory_msgs/JointTrajectory``).
 * ``~/stop`` (``std_srvs/Trigger``): brake within ``max_acceleration`` (and ``max_jerk``
   with profile ``scurve``) and hold.
+* ``~/follow_joint_trajectory`` (``control_msgs/action/FollowJointTrajectory``), where
+  control_msgs is importable: :mod:`traj_gen_ros.node.follow_joint_trajectory`.
 * ``robot_description`` (``std_msgs/String``, transient local): the robot's URDF, in.
 * ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): the node's health, about 1 Hz.
 * ``joint_topic`` (``sensor_msgs/JointState``, best effort): the measured state, in
@@ -65,6 +67,7 @@ from traj_gen_ros.node.commands_out import (
 from traj_gen_ros.node.config import Config, initial_state, make_config
 from traj_gen_ros.node.diagnostics import RateMeter
 from traj_gen_ros.node.diagnostics_publisher import CountingAnswers, NodeDiagnostics
+from traj_gen_ros.node.follow_joint_trajectory import create_server
 from traj_gen_ros.node.joint_feedback import JointFeedback
 from traj_gen_ros.node.measured_state import MeasuredState
 from traj_gen_ros.node.motion import held, PlannedMotion
@@ -146,6 +149,12 @@ class TrajectoryGenerator(Node):
             self.context, [self._goal_subscription, self._via_subscription],
             self.get_logger().error)
         self.create_service(Trigger, '~/stop', self._on_stop)
+        # ~/follow_joint_trajectory where control_msgs is importable (follow_joint_trajectory)
+        self.follow_joint_trajectory = create_server(
+            self, self._requests, self._stream, self._answers, lambda: self._config,
+            self._now_ns)
+        if self.follow_joint_trajectory is not None and self.feedback is not None:
+            self._wire_measured_state(self.follow_joint_trajectory, self.feedback)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._diagnostics = NodeDiagnostics(
@@ -160,6 +169,15 @@ class TrajectoryGenerator(Node):
         self.get_logger().info(
             f'streaming {len(self._config.joints)} joints at {self._config.rate_hz:g} Hz '
             f'({priority}), profile {self._config.profile}{waiting}')
+
+    @staticmethod
+    def _wire_measured_state(server: object, feedback: JointFeedback) -> None:
+        """Check the action's start and tolerances against the measured state."""
+        measured = feedback.measured
+        server.measured_positions = lambda: None if measured.lost else measured.position
+        server.reseed_to_measured = lambda: feedback.hold_where_measured(
+            'path tolerance violated')
+        feedback.on_lost.append(server.abort_active)
 
     def _plan_publisher(self, publish: Callable[[bytes], None]
                         ) -> Callable[[int, PlannedMotion], None]:

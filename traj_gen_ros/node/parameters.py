@@ -39,10 +39,12 @@ from traj_gen_ros.node.measured_state import DEFAULT_STATE_TOLERANCE, DEFAULT_TI
 DEFAULT_JOINTS = [f'joint_{index}' for index in range(1, 7)]
 PER_JOINT = 'one value for all joints or one per joint'
 #: Parameters declared as doubles: an integer is stored as a double.
-DOUBLES = ('rate_hz', 'joint_topic_timeout')
+DOUBLES = ('rate_hz', 'joint_topic_timeout', 'allowed_start_tolerance', 'goal_time_tolerance',
+           'stopped_velocity_tolerance')
 #: Per-joint parameters, declared as double arrays: one number is stored as ``[number]``.
 DOUBLE_ARRAYS = ('initial_positions', 'max_velocity', 'max_acceleration', 'lspb_acceleration',
-                 'max_jerk', 'min_position', 'max_position', 'state_tolerance')
+                 'max_jerk', 'min_position', 'max_position', 'state_tolerance', 'path_tolerance',
+                 'goal_tolerance')
 
 _DOUBLE = Parameter.Type.DOUBLE
 _DOUBLE_ARRAY = Parameter.Type.DOUBLE_ARRAY
@@ -141,6 +143,34 @@ def descriptors(joint_count: int) -> dict[str, tuple[object, ParameterDescriptor
                         f'rad or m; read only).',
             type=ParameterType.PARAMETER_DOUBLE_ARRAY, read_only=True,
             additional_constraints=f'{PER_JOINT}; each >= 0, 0: never; rad or m')),
+        **action_descriptors(),
+    }
+
+
+def _non_negative(description: str, default: float, upper: float) -> tuple[float, object]:
+    return default, ParameterDescriptor(
+        description=description, type=ParameterType.PARAMETER_DOUBLE,
+        floating_point_range=[FloatingPointRange(from_value=0.0, to_value=upper)])
+
+
+def action_descriptors() -> dict[str, tuple[object, ParameterDescriptor]]:
+    """Return the ``~/follow_joint_trajectory`` parameters (MoveIt's and JTC's names)."""
+    return {
+        'allowed_start_tolerance': _non_negative(
+            'Largest distance of a goal point at time 0 from where the arm is, rad; 0: not '
+            'checked (as MoveIt).', 0.01, 1000.0),
+        'goal_time_tolerance': _non_negative(
+            'Time after a goal ends within which the arm must be within goal_tolerance and '
+            'still, s; 0: no limit (as JTC).', 0.25, 3600.0),
+        'stopped_velocity_tolerance': _non_negative(
+            'Largest measured |velocity| of a joint at rest at a goal end, rad/s; 0: not '
+            'checked.', 0.01, 1000.0),
+        'path_tolerance': ([0.0], _per_joint(
+            'Largest deviation of the measured state from the setpoint during a goal',
+            'each >= 0; 0 means not checked', 'rad or m')),
+        'goal_tolerance': ([0.0], _per_joint(
+            'Largest deviation of the measured state from a goal end',
+            'each >= 0; 0 means not checked', 'rad or m')),
     }
 
 

@@ -96,18 +96,19 @@ def parse_goal(joints: Sequence[str], names: Sequence[str],
 
 
 def parse_via(joints: Sequence[str], names: Sequence[str],
-              points: Sequence[ViaPoint]) -> ViaRequest:
+              points: Sequence[ViaPoint], what: str = 'via_points') -> ViaRequest:
     """
     Check via points given as ``(positions, velocities, accelerations, time_from_start)``.
 
     Velocities and accelerations are boundary conditions: each is given for every point
     (with one value per name) or for none, as ``joint_trajectory_controller`` requires.
+    ``what`` names the request in the reasons (``via_points``, or an action goal's).
     """
     joints = list(joints)
     names = list(names)
-    indices = _joint_indices(joints, names, 'via_points')
+    indices = _joint_indices(joints, names, what)
     if len(points) == 0:
-        raise RequestError('via_points has no points: give at least one point')
+        raise RequestError(f'{what} has no points: give at least one point')
     if len(points) > MAX_VIA_POINTS:
         raise RequestError(too_many_points(len(points)))
     count = len(names)

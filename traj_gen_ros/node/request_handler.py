@@ -138,6 +138,9 @@ class RequestHandler:
         # any, took to plan (ns).
         self._recent_ns: dict[tuple[str, str, bool], collections.deque[int]] = {}
         self._any_recent_ns: collections.deque[int] = collections.deque([0], maxlen=RECENT)
+        #: Called with each request spliced in and its start (ns), before it is answered:
+        #: ``~/follow_joint_trajectory`` ends the goal a newer request replaced.
+        self.on_accepted: Callable[[Request, int], None] = lambda request, start_ns: None
 
     # ------------------------------------------------------------------ take and parse
 
@@ -204,6 +207,7 @@ class RequestHandler:
             return None
         motion, now_ns, start_ns, first_ns = placed
         self._on_plan(start_ns, motion)
+        self.on_accepted(request, start_ns)
         waited = first_ns - self._now_ns() <= SAMPLE_AFTER_FIRST_NS
         if waited:
             self._stream.wait_published(first_ns, ANSWER_WAIT)
@@ -219,6 +223,11 @@ class RequestHandler:
             self._stream.wait_published(first_ns, ANSWER_WAIT)
         self._answers.accepted(request, motion, now_ns, first_ns)
         return motion
+
+    def submit(self, request: Request, plan: Planner) -> PlannedMotion | None:
+        """:meth:`execute`, one request at a time with the others (for the action server)."""
+        with self._lock:
+            return self.execute(request, plan)
 
     def _plan_and_splice(self, request: Request, plan: Planner, config: Config
                          ) -> tuple[PlannedMotion, int, int, int] | None:

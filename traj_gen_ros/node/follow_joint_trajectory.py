@@ -1,0 +1,401 @@
+"""
+``~/follow_joint_trajectory`` (``control_msgs/action/FollowJointTrajectory``): a goal's life.
+
+So that MoveIt's simple controller manager (``type: FollowJointTrajectory``, ``action_ns:
+follow_joint_trajectory``) can use the node as its controller. The points are parsed,
+checked and planned in :mod:`traj_gen_ros.node.trajectory_goal`, the tolerances in
+:mod:`traj_gen_ros.node.trajectory_tolerances`; this module is the rclpy glue:
+
+* every goal is accepted and marked executing at once; one that is refused is aborted at
+  once with its ``error_code`` and a reason (MoveIt reads the status, and logs the rest),
+  and changes nothing;
+* a valid goal goes the one way every request goes
+  (:meth:`~traj_gen_ros.node.request_handler.RequestHandler.submit`): planned from the
+  stream's next tick and spliced there, so it continues the setpoint without a jump;
+* a newer goal, ``~/goal``, ``~/via_points`` or ``~/stop`` spliced in ends the active goal
+  ABORTED saying what replaced it (:attr:`RequestHandler.on_accepted`);
+* a cancel brakes to rest within the limits (``plan_stop``), then CANCELED;
+* a monitor timer on the executor (every ``MONITOR_PERIOD`` s while a goal is active)
+  publishes the feedback, checks the tolerances against the measured state (if any) and
+  ends the goal: SUCCEEDED once the stream has published the trajectory's end (and, with
+  a measured state, the arm is within ``goal_tolerance`` and still).
+
+The goal's terminal state and result are set by an execute callback scheduled only when
+the goal ends (:meth:`ActionServer.notify_execute`): an ``async`` execute callback
+awaiting a future would be resumed by Jazzy's executor on every spin, a busy loop beside
+the stream thread. Everything here runs on the executor thread, except
+:meth:`_on_request_accepted`, which only records under a lock what the monitor then ends.
+
+Feedback: ``joint_names`` the goal's, in its order; ``desired`` the setpoint (position,
+velocity, acceleration) at the monitor tick; ``actual`` the measured positions (else the
+setpoint); ``error`` desired − actual; at most every ``MONITOR_PERIOD`` s (50 Hz), and at
+most once per stream period.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+import threading
+
+import numpy as np
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.action import ActionServer, CancelResponse
+from rclpy.action.server import GoalEvent, ServerGoalHandle
+from rclpy.node import Node
+from traj_gen_ros.node.answers import Answers, Request
+from traj_gen_ros.node.config import Config
+from traj_gen_ros.node.motion import PlannedMotion, State
+from traj_gen_ros.node.request_handler import brake_planner, RequestHandler
+from traj_gen_ros.node.stream import Stream
+from traj_gen_ros.node.trajectory_goal import (
+    check_stamp,
+    GoalError,
+    INVALID_GOAL,
+    parse_trajectory_goal,
+    PATH_TOLERANCE_VIOLATED,
+    plan_trajectory_goal,
+    SUCCESSFUL,
+    TrajectoryGoal,
+)
+from traj_gen_ros.node.trajectory_tolerances import (
+    ABORTED,
+    CANCELED,
+    default_tolerances,
+    goal_tolerances,
+    outcome,
+    SUCCEEDED,
+    Tolerances,
+)
+from trajectory_msgs.msg import JointTrajectoryPoint
+
+try:
+    from control_msgs.action import FollowJointTrajectory
+    UNAVAILABLE = ''
+except ImportError as _error:  # no control_msgs: the node runs without the action
+    FollowJointTrajectory = None
+    UNAVAILABLE = str(_error)
+
+KIND = 'follow_joint_trajectory'
+#: The requests the action itself makes (braking on a cancel or a path violation).
+OWN_KINDS = ('follow_joint_trajectory_cancel', 'follow_joint_trajectory_hold')
+#: The monitor's period (s): feedback rate and how soon a result follows its cause.
+MONITOR_PERIOD = 0.02
+TOLERANCE_PARAMETERS = ('allowed_start_tolerance', 'goal_time_tolerance',
+                        'stopped_velocity_tolerance', 'path_tolerance', 'goal_tolerance')
+_REPLACED_BY = {'goal': 'a ~/goal request', 'via_points': 'a ~/via_points request',
+                'stop': 'a ~/stop call', KIND: 'a newer follow_joint_trajectory goal'}
+
+
+def _seconds(duration: object) -> float:
+    return duration.sec + duration.nanosec * 1e-9
+
+
+@dataclass
+class ActiveGoal:
+    """A goal being executed: its handle, request, tolerances and times (ns, node clock)."""
+
+    handle: ServerGoalHandle
+    goal: TrajectoryGoal
+    request: Request
+    tolerances: Tolerances
+    start_ns: int = 0
+    end_ns: int = 0
+    target: np.ndarray | None = None
+    cancel: Request | None = None
+    brake_start_ns: int | None = None
+    replaced: str = ''
+    feedback_ns: int = -(2 ** 62)
+
+
+class FollowJointTrajectoryServer:
+    """The action server and the life cycle of its goals (see the module doc)."""
+
+    def __init__(self, node: Node, handler: RequestHandler, stream: Stream, answers: Answers,
+                 config: Callable[[], Config], now_ns: Callable[[], int],
+                 measured_positions: Callable[[], np.ndarray | None] = lambda: None,
+                 measured_velocities: Callable[[], np.ndarray | None] = lambda: None,
+                 reseed_to_measured: Callable[[], None] | None = None) -> None:
+        """
+        Serve ``~/follow_joint_trajectory`` on ``node`` through ``handler``.
+
+        :param measured_positions: where the arm is (rad, joint-set order), or None
+            without a measured state (then the setpoint stands for it).
+        :param measured_velocities: the measured velocities (rad/s), or None.
+        :param reseed_to_measured: hold where the arm is after a path-tolerance violation;
+            default: brake to rest within the limits.
+        """
+        self._node = node
+        self._handler = handler
+        self._stream = stream
+        self._answers = answers
+        self._config = config
+        self._now_ns = now_ns
+        self.measured_positions = measured_positions
+        self.measured_velocities = measured_velocities
+        self.reseed_to_measured = reseed_to_measured or self._hold
+        self._log = node.get_logger()
+        self._lock = threading.Lock()
+        self._active: ActiveGoal | None = None
+        self._starting: ActiveGoal | None = None
+        self._replaced: list[ActiveGoal] = []
+        self._defaults = self._read_defaults({})
+        node.add_on_set_parameters_callback(self._check_parameters)
+        node.add_post_set_parameters_callback(self._apply_parameters)
+        previous = handler.on_accepted
+
+        def on_accepted(request: Request, start_ns: int) -> None:
+            previous(request, start_ns)
+            self._on_request_accepted(request, start_ns)
+        handler.on_accepted = on_accepted
+        self._timer = node.create_timer(MONITOR_PERIOD, self._monitor)
+        self._timer.cancel()
+        self._server = ActionServer(
+            node, FollowJointTrajectory, '~/follow_joint_trajectory', self._unexpected,
+            handle_accepted_callback=self._start, cancel_callback=self._on_cancel)
+
+    # ------------------------------------------------------------------ parameters
+
+    def _read_defaults(self, changed: dict[str, object]) -> tuple[float, Tolerances]:
+        """``(allowed_start_tolerance, Tolerances)`` from the parameters; ValueError."""
+        values = {name: self._node.get_parameter(name).value for name in TOLERANCE_PARAMETERS}
+        values.update(changed)
+        return values['allowed_start_tolerance'], default_tolerances(
+            len(self._config().joints), values['path_tolerance'], values['goal_tolerance'],
+            values['goal_time_tolerance'], values['stopped_velocity_tolerance'])
+
+    def _check_parameters(self, parameters: list) -> SetParametersResult:
+        changed = {p.name: p.value for p in parameters if p.name in TOLERANCE_PARAMETERS}
+        try:
+            self._read_defaults(changed)
+        except ValueError as error:
+            return SetParametersResult(successful=False, reason=str(error))
+        return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, parameters: list) -> None:
+        if any(p.name in TOLERANCE_PARAMETERS for p in parameters):
+            self._defaults = self._read_defaults({})
+
+    # ------------------------------------------------------------------ a new goal
+
+    def _start(self, handle: ServerGoalHandle) -> None:
+        """Mark an accepted goal executing, then refuse it or splice it in (executor thread)."""
+        handle._update_state(GoalEvent.EXECUTE)  # what execute() does, minus scheduling
+        message = handle.request
+        trajectory = message.trajectory
+        request = Request(KIND, self._answers.values(KIND, trajectory.header.frame_id), 0,
+                          None)
+        try:
+            active = self._parse(handle, request)
+            self._starting = active
+            motion = self._handler.submit(request, self._planner(active))
+        except GoalError as error:
+            self._answers.refused(request, str(error))
+            self._end(handle, ABORTED, error.code, str(error))
+            return
+        except Exception as error:  # noqa: BLE001 - a goal must never kill the node
+            self._log.error(f'{KIND}: unexpected failure: {error!r}')
+            self._end(handle, ABORTED, INVALID_GOAL, f'internal error: {error}')
+            return
+        finally:
+            self._starting = None
+        if motion is None:  # refused by the planner (answered on ~/status already)
+            refusal = active.goal.refusal or GoalError(
+                INVALID_GOAL, 'could not be planned in time for the stream: resend it')
+            self._end(handle, ABORTED, refusal.code, str(refusal))
+            return
+        self._started(active, motion)
+
+    def _parse(self, handle: ServerGoalHandle, request: Request) -> ActiveGoal:
+        message = handle.request
+        trajectory = message.trajectory
+        stamp = trajectory.header.stamp
+        points = [(p.positions, p.velocities, p.accelerations, _seconds(p.time_from_start))
+                  for p in trajectory.points]
+        joints = self._config().joints
+        goal = parse_trajectory_goal(joints, trajectory.joint_names, points,
+                                     stamp.sec * 1_000_000_000 + stamp.nanosec,
+                                     len(message.multi_dof_trajectory.points))
+        tolerances = goal_tolerances(
+            self._defaults[1], joints,
+            [(t.name, t.position) for t in message.path_tolerance],
+            [(t.name, t.position) for t in message.goal_tolerance],
+            _seconds(message.goal_time_tolerance))
+        check_stamp(goal, self._now_ns())
+        request.request, request.stamp_ns = goal, goal.stamp_ns
+        return ActiveGoal(handle, goal, request, tolerances)
+
+    def _planner(self, active: ActiveGoal) -> Callable[..., PlannedMotion]:
+        tolerance = self._defaults[0]
+
+        def plan(config: Config, state: State, hold_at: np.ndarray,
+                 goal: TrajectoryGoal) -> PlannedMotion:
+            measured = self.measured_positions()
+            reference = state.position if measured is None else measured
+            return plan_trajectory_goal(config, state, hold_at, goal, reference,
+                                        tolerance if tolerance > 0.0 else np.inf)
+        return plan
+
+    def _started(self, active: ActiveGoal, motion: PlannedMotion) -> None:
+        active.end_ns = active.start_ns + int(round(motion.plan.duration * 1e9))
+        active.target = motion.end
+        goal = active.goal
+        if goal.factor > 1.0:
+            self._log.warning(f'{KIND} goal: {goal.slowed}: lasts '
+                              f'{motion.plan.duration:.4g} s instead of {goal.duration:.4g} s')
+        self._timer.reset()
+
+    def _on_request_accepted(self, request: Request, start_ns: int) -> None:
+        """Any request spliced in (any thread): the one it replaces ends (:meth:`_monitor`)."""
+        with self._lock:
+            active, starting = self._active, self._starting
+            if request.kind in OWN_KINDS:
+                if active is not None and request is active.cancel:
+                    active.brake_start_ns = start_ns
+                return
+            if starting is not None and request is starting.request:
+                starting.start_ns = start_ns
+                self._active = starting
+            else:
+                self._active = None
+            if active is not None:
+                active.replaced = (f'replaced by {_REPLACED_BY.get(request.kind, request.kind)} '
+                                   f'(request_id {request.values.get("request_id", "?")}); '
+                                   'the motion continues from the setpoint')
+                self._replaced.append(active)
+
+    # ------------------------------------------------------------------ cancel
+
+    def _on_cancel(self, handle: ServerGoalHandle) -> CancelResponse:
+        """Accept a cancel of the active goal and brake to rest (executor thread)."""
+        try:
+            with self._lock:
+                active = self._active
+                if active is None or active.handle is not handle:
+                    return CancelResponse.REJECT  # ended, or ending
+                if active.cancel is not None:
+                    return CancelResponse.ACCEPT
+                active.cancel = Request(OWN_KINDS[0], self._answers.values(OWN_KINDS[0], ''),
+                                        0, None)
+            if self._handler.submit(active.cancel, brake_planner) is None:
+                active.brake_start_ns = self._stream.last_published()
+            return CancelResponse.ACCEPT
+        except Exception as error:  # noqa: BLE001 - a cancel must never kill the node
+            self._log.error(f'{KIND}: cancel failed: {error!r}')
+            return CancelResponse.REJECT
+
+    def _hold(self) -> None:
+        """Brake to rest within the limits: the default after a path-tolerance violation."""
+        request = Request(OWN_KINDS[1], self._answers.values(OWN_KINDS[1], ''), 0, None)
+        self._handler.submit(request, brake_planner)
+
+    # ------------------------------------------------------------------ monitor and end
+
+    def _monitor(self) -> None:
+        """Feedback, tolerances and the end of the goals (executor thread, a timer)."""
+        try:
+            with self._lock:
+                replaced, self._replaced = self._replaced, []
+                active = self._active
+            for goal in replaced:
+                status = CANCELED if goal.cancel is not None else ABORTED
+                self._end(goal.handle, status, INVALID_GOAL if status == ABORTED
+                          else SUCCESSFUL, goal.replaced)
+            if active is not None:
+                self._watch(active)
+            if self._active is None and not self._replaced:
+                self._timer.cancel()
+        except Exception as error:  # noqa: BLE001 - the monitor must never kill the node
+            self._log.error(f'{KIND}: monitor failed: {error!r}')
+
+    def _watch(self, active: ActiveGoal) -> None:
+        now_ns = self._now_ns()
+        published_ns = self._stream.last_published()
+        if active.cancel is not None:
+            start = active.brake_start_ns
+            if start is not None and published_ns >= start and \
+                    not self._stream.moving_at(published_ns):
+                self._finish(active, CANCELED, SUCCESSFUL, 'canceled: braked to rest')
+            return
+        desired, _ = self._stream.start_state(now_ns)
+        measured = self.measured_positions()
+        self._feedback(active, now_ns, desired, measured)
+        ended = outcome(active.tolerances, active.goal.request.joints, self._config().joints,
+                        (active.start_ns, active.end_ns, now_ns, published_ns),
+                        desired.position, active.target, measured,
+                        self.measured_velocities, active.goal.slowed)
+        if ended is not None:
+            self._finish(active, *ended)
+            if ended[1] == PATH_TOLERANCE_VIOLATED:
+                self.reseed_to_measured()
+
+    def abort_active(self, reason: str) -> None:
+        """End the running goal ABORTED with ``reason``: the measured state was lost."""
+        with self._lock:
+            active = self._active
+        if active is not None:
+            self._finish(active, ABORTED, PATH_TOLERANCE_VIOLATED, reason)
+
+    def _feedback(self, active: ActiveGoal, now_ns: int, desired: State,
+                  measured: np.ndarray | None) -> None:
+        if now_ns - active.feedback_ns < self._config().period_ns:
+            return
+        active.feedback_ns = now_ns
+        active.handle.publish_feedback(feedback_message(
+            active.goal.names, active.goal.request.joints, now_ns, desired, measured))
+
+    def _finish(self, active: ActiveGoal, status: str, code: int, text: str) -> None:
+        with self._lock:
+            if self._active is active:
+                self._active = None
+        self._end(active.handle, status, code, text)
+
+    def _end(self, handle: ServerGoalHandle, status: str, code: int, text: str) -> None:
+        """Schedule the goal's terminal state and result (see the module doc)."""
+        result = FollowJointTrajectory.Result(error_code=code, error_string=text)
+        if status == SUCCEEDED:
+            self._log.info(f'{KIND} goal succeeded{": " + text if text else ""}')
+        else:
+            self._log.warning(f'{KIND} goal {status} (error_code {code}): {text}')
+
+        def finish(goal_handle: ServerGoalHandle) -> object:
+            if status == SUCCEEDED:
+                goal_handle.succeed()
+            elif status == CANCELED and goal_handle.is_cancel_requested:
+                goal_handle.canceled()
+            else:
+                goal_handle.abort()
+            return result
+        self._server.notify_execute(handle, finish)
+
+    def _unexpected(self, handle: ServerGoalHandle) -> object:
+        """Never scheduled (:meth:`_end` gives each goal its own): abort."""
+        handle.abort()
+        return FollowJointTrajectory.Result(error_code=INVALID_GOAL, error_string='internal')
+
+
+def feedback_message(names: tuple[str, ...], named: np.ndarray, now_ns: int, desired: State,
+                     measured: np.ndarray | None) -> object:
+    """Return the feedback: the goal's joints, the setpoint, the measured state, the error."""
+    actual = desired.position if measured is None else measured
+    feedback = FollowJointTrajectory.Feedback(joint_names=list(names))
+    feedback.header.stamp.sec, feedback.header.stamp.nanosec = divmod(now_ns, 1_000_000_000)
+    feedback.desired = JointTrajectoryPoint(
+        positions=desired.position[named].tolist(),
+        velocities=desired.velocity[named].tolist(),
+        accelerations=desired.acceleration[named].tolist())
+    feedback.actual = JointTrajectoryPoint(positions=actual[named].tolist())
+    feedback.error = JointTrajectoryPoint(
+        positions=(desired.position[named] - actual[named]).tolist())
+    return feedback
+
+
+def create_server(node: Node, handler: RequestHandler, stream: Stream, answers: Answers,
+                  config: Callable[[], Config], now_ns: Callable[[], int]
+                  ) -> FollowJointTrajectoryServer | None:
+    """Create the action server, or say once (info) why there is none and return None."""
+    if FollowJointTrajectory is None:
+        node.get_logger().info(f'control_msgs is not importable ({UNAVAILABLE}): running '
+                               'without ~/follow_joint_trajectory')
+        return None
+    return FollowJointTrajectoryServer(node, handler, stream, answers, config, now_ns)
