@@ -39,8 +39,13 @@ def piece_spans(trajectory):
 
 
 def piece_state(trajectory, piece, joint, local_time):
-    """Position, velocity and acceleration of one piece at a local time, by numpy."""
-    coefficients = trajectory.coefficients[piece, :, joint]
+    """
+    Position, velocity and acceleration of one piece at a local time, by numpy.
+
+    ``trajectory`` is a Trajectory or its coefficients array ``(pieces, order, joints)``.
+    """
+    table = getattr(trajectory, 'coefficients', trajectory)
+    coefficients = table[piece, :, joint]
     velocity = poly.polyder(coefficients)
     acceleration = poly.polyder(velocity)
     return (poly.polyval(local_time, coefficients), poly.polyval(local_time, velocity),
@@ -53,7 +58,9 @@ def boundary_jumps(trajectory):
 
     Each piece is evaluated at its own end and the next at its own start. Returns an
     array ``(3, pieces - 1, joints)`` of ``right - left``, plus a scale of the same shape
-    (the larger magnitude of the two sides, at least 1) for relative tolerances.
+    for relative tolerances: the larger magnitude of the two sides, at least 1, and at
+    least the sum of the magnitudes of the terms summed at the piece's end (what bounds
+    the rounding of evaluating it: a 10 s quintic ending at rest sums terms of ~1e3 to 0).
     """
     _, lengths = piece_spans(trajectory)
     pieces, joints = trajectory.piece_count, trajectory.joint_count
@@ -63,9 +70,12 @@ def boundary_jumps(trajectory):
         for piece in range(pieces - 1):
             left = piece_state(trajectory, piece, joint, lengths[piece, joint])
             right = piece_state(trajectory, piece + 1, joint, 0.0)
+            terms = piece_state(np.abs(trajectory.coefficients), piece, joint,
+                                lengths[piece, joint])
             for order in range(3):
                 jumps[order, piece, joint] = right[order] - left[order]
-                scales[order, piece, joint] = max(1.0, abs(left[order]), abs(right[order]))
+                scales[order, piece, joint] = max(1.0, abs(left[order]), abs(right[order]),
+                                                  terms[order])
     return jumps, scales
 
 
