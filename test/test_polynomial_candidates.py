@@ -70,11 +70,6 @@ def resultant(p, q):
     return poly.polysub(m(first, first), m(second, third))
 
 
-def divided_out_of_t(p, constant):
-    """``P / T`` when P has no constant term (D = 0): the powers shift down."""
-    return [np.zeros(1), p[0], p[1]] if constant else p
-
-
 @pytest.mark.parametrize('profile, order, kind', list(FACTORS))
 def test_resultant_tables_equal_the_sylvester_resultant(profile, order, kind):
     rng = np.random.default_rng(3)

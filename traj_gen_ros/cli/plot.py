@@ -24,7 +24,6 @@ import numpy as np  # noqa: E402
 from traj_gen_ros.cli.common import joint_names as default_joint_names  # noqa: E402
 
 DPI = 100
-PANELS = ('position', 'velocity', 'acceleration')
 _DENSE_SAMPLES = 1000
 
 
@@ -83,13 +82,6 @@ def plot_trajectory(trajectory: object, output: str, **options: object) -> dict:
     """Write the PNG of :func:`draw_trajectory` (``options`` are its keywords) to ``output``."""
     figure = draw_trajectory(trajectory, **options)
     return write_png(figure, output, trajectory.joint_count)
-
-
-def plot_samples(times: np.ndarray, positions: np.ndarray, velocities: np.ndarray,
-                 accelerations: np.ndarray, output: str, **options: object) -> dict:
-    """Write the PNG of :func:`draw_samples` (``options`` are its keywords) to ``output``."""
-    figure = draw_samples(times, positions, velocities, accelerations, **options)
-    return write_png(figure, output, positions.shape[1])
 
 
 def write_png(figure: Figure, output: str, joints: int) -> dict:

@@ -66,7 +66,6 @@ class MeasuredState:
         self.reseeds = 0
         self.last_reseed = ''
         self.lost = False  # the timeout has passed since the latest valid message
-        self._index = {name: index for index, name in enumerate(self.joints)}
         self._names: tuple[str, ...] = ()
         self._columns = np.zeros(0, dtype=int)
 
