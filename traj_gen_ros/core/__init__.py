@@ -17,7 +17,7 @@ from traj_gen_ros.core.kinematic_limits import (
     Violation,
     within_limits,
 )
-from traj_gen_ros.core.paths import plan_path
+from traj_gen_ros.core.paths import plan_path, via_durations
 from traj_gen_ros.core.polynomial import (
     continuous_velocities,
     cubic,
@@ -27,7 +27,7 @@ from traj_gen_ros.core.polynomial import (
     quintic_via,
 )
 from traj_gen_ros.core.stops import brake
-from traj_gen_ros.core.timing import hold, min_time, PROFILES, via_durations
+from traj_gen_ros.core.timing import hold, min_time, PROFILES
 from traj_gen_ros.core.trajectory import JerkLimitedTrajectory, Trajectory
 
 __all__ = [

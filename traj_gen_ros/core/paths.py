@@ -3,8 +3,9 @@ The one entry point for paths through via points, whatever the profile.
 
 :func:`plan_path` takes the points, the segment durations (or none, to time them from the
 limits) and the start state, and hands them to the profile's own via-point planner
-(Craig §7.3: cubic and quintic splines, LSPB with blends; the jerk-limited S-curve).
-Moves from a state to one goal go through :func:`traj_gen_ros.core.timing.min_time`.
+(Craig §7.3: cubic and quintic splines, LSPB with blends; the jerk-limited S-curve);
+:func:`via_durations` times the segments from the limits. Moves from a state to one goal
+go through :func:`traj_gen_ros.core.timing.min_time`.
 
 Units: rad, rad/s, rad/s², rad/s³, s.
 """
@@ -19,7 +20,7 @@ from traj_gen_ros.core.blends import lspb_via
 from traj_gen_ros.core.jerk_limited.path import scurve_via, scurve_via_durations
 from traj_gen_ros.core.kinematic_limits import limit_violation
 from traj_gen_ros.core.polynomial import cubic_via, quintic_via
-from traj_gen_ros.core.timing import check_profile, shortest_duration, via_durations
+from traj_gen_ros.core.timing import check_profile, rest_to_rest_times, shortest_duration
 from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.core.validation import ArrayLike
 
@@ -122,3 +123,56 @@ def _scurve_path(path: np.ndarray, durations: ArrayLike | None, velocities: str 
         return build(base)
     except ValueError:
         return shortest_duration(lambda scale: build(base * scale), 1.0, *limits[:2])
+
+
+@validation.refuses_overflow('via_durations')
+def via_durations(
+    points: ArrayLike,
+    max_velocity: ArrayLike,
+    max_acceleration: ArrayLike,
+    profile: str = 'cubic',
+    velocities: str = 'heuristic',
+    acceleration: ArrayLike | None = None,
+    max_jerk: ArrayLike | None = None,
+) -> np.ndarray:
+    """
+    Segment durations (s) that keep a via-point path within the limits.
+
+    ``scurve`` (with ``max_jerk``, rad/s³) is timed by
+    :func:`traj_gen_ros.core.jerk_limited.path.scurve_via_durations`.
+
+    Each segment starts from its own rest-to-rest minimum time for the slowest joint;
+    the whole path is then stretched by one factor, found by bisection on the exact peaks
+    of the planned ``profile`` (``cubic``/``quintic`` with ``velocities``, or ``lspb`` with
+    blend ``acceleration``, default ``max_acceleration``), until no limit is exceeded.
+    """
+    path = validation.path_points(points)
+    joint_count = path.shape[1]
+    max_velocity = validation.per_joint('max_velocity', max_velocity, joint_count)
+    max_acceleration = validation.per_joint(
+        'max_acceleration', max_acceleration, joint_count)
+    check_profile(profile)
+    if profile == 'scurve':
+        if max_jerk is None:
+            raise ValueError('profile scurve needs max_jerk (rad/s^3, > 0)')
+        return scurve_via_durations(path, max_velocity, max_acceleration, max_jerk,
+                                    velocities)
+    if velocities not in ('heuristic', 'continuous'):
+        raise ValueError(f'velocities must be "heuristic" or "continuous", got "{velocities}"')
+    blend_acceleration = max_acceleration if acceleration is None else (
+        validation.per_joint('acceleration', acceleration, joint_count))
+    steps = np.abs(np.diff(path, axis=0))
+    base = rest_to_rest_times(steps, max_velocity, max_acceleration, profile).max(axis=1)
+    if np.max(steps) <= 1e-12 * max(1.0, float(np.max(np.abs(path)))):
+        raise ValueError("every via point equals the start (to 1e-12 of the path's scale): "
+                         'there is nothing to move')
+    base = np.maximum(base, 1e-6 * base.max())
+    planners = {
+        'cubic': lambda durations: cubic_via(path, durations, velocities),
+        'quintic': lambda durations: quintic_via(path, durations, velocities),
+        'lspb': lambda durations: lspb_via(path, durations, blend_acceleration),
+    }
+    plan = planners[profile]
+    best = shortest_duration(lambda scale: plan(base * scale), 1.0,
+                             max_velocity, max_acceleration)
+    return base * (best.duration / base.sum())

@@ -11,11 +11,11 @@ Rest-to-rest peaks (distance ``D``, duration ``T``), used in closed form:
 - cubic eq. (6): peak velocity ``1.5 D/T``, peak acceleration ``6 D/T²``.
 - quintic: peak velocity ``15/8 D/T``, peak acceleration ``10/sqrt(3) D/T²``.
 From a moving start (an extension for replanning) the duration is computed exactly:
-LSPB in closed form (:mod:`traj_gen_ros.core.exact.second_order`), cubic and quintic from each
-joint's
-set of feasible durations (:mod:`traj_gen_ros.core.exact.polynomial_durations`). Via-point paths
-are
-stretched by one factor, found by bisection on exact peaks (:func:`shortest_duration`).
+LSPB in closed form (:mod:`traj_gen_ros.core.exact.second_order`), cubic and quintic from
+each joint's set of feasible durations
+(:mod:`traj_gen_ros.core.exact.polynomial_durations`). Via-point paths are timed by
+:func:`traj_gen_ros.core.paths.via_durations`, stretched by one factor found by bisection
+on exact peaks (:func:`shortest_duration`).
 """
 
 from __future__ import annotations
@@ -25,16 +25,15 @@ import math
 
 import numpy as np
 from traj_gen_ros.core import validation
-from traj_gen_ros.core.blends import lspb_via, three_pieces
+from traj_gen_ros.core.blends import three_pieces
 from traj_gen_ros.core.exact import second_order
 from traj_gen_ros.core.exact.polynomial_durations import (
     polynomial_minimum_duration,
     SHORTEST_POLYNOMIAL,
 )
 from traj_gen_ros.core.jerk_limited.move import scurve_min_time
-from traj_gen_ros.core.jerk_limited.path import scurve_via_durations
 from traj_gen_ros.core.kinematic_limits import JointError, within_limits
-from traj_gen_ros.core.polynomial import cubic, cubic_via, quintic, quintic_via, to_rest
+from traj_gen_ros.core.polynomial import cubic, quintic, to_rest
 from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.core.validation import ArrayLike
 
@@ -253,59 +252,6 @@ def shortest_duration(
         if high - low <= 1e-9 * high:
             break
     return best
-
-
-@validation.refuses_overflow('via_durations')
-def via_durations(
-    points: ArrayLike,
-    max_velocity: ArrayLike,
-    max_acceleration: ArrayLike,
-    profile: str = 'cubic',
-    velocities: str = 'heuristic',
-    acceleration: ArrayLike | None = None,
-    max_jerk: ArrayLike | None = None,
-) -> np.ndarray:
-    """
-    Segment durations (s) that keep a via-point path within the limits.
-
-    ``scurve`` (with ``max_jerk``, rad/s³) is timed by
-    :func:`traj_gen_ros.core.jerk_limited.path.scurve_via_durations`.
-
-    Each segment starts from its own rest-to-rest minimum time for the slowest joint;
-    the whole path is then stretched by one factor, found by bisection on the exact peaks
-    of the planned ``profile`` (``cubic``/``quintic`` with ``velocities``, or ``lspb`` with
-    blend ``acceleration``, default ``max_acceleration``), until no limit is exceeded.
-    """
-    path = validation.path_points(points)
-    joint_count = path.shape[1]
-    max_velocity = validation.per_joint('max_velocity', max_velocity, joint_count)
-    max_acceleration = validation.per_joint(
-        'max_acceleration', max_acceleration, joint_count)
-    check_profile(profile)
-    if profile == 'scurve':
-        if max_jerk is None:
-            raise ValueError('profile scurve needs max_jerk (rad/s^3, > 0)')
-        return scurve_via_durations(path, max_velocity, max_acceleration, max_jerk,
-                                    velocities)
-    if velocities not in ('heuristic', 'continuous'):
-        raise ValueError(f'velocities must be "heuristic" or "continuous", got "{velocities}"')
-    blend_acceleration = max_acceleration if acceleration is None else (
-        validation.per_joint('acceleration', acceleration, joint_count))
-    steps = np.abs(np.diff(path, axis=0))
-    base = rest_to_rest_times(steps, max_velocity, max_acceleration, profile).max(axis=1)
-    if np.max(steps) <= 1e-12 * max(1.0, float(np.max(np.abs(path)))):
-        raise ValueError("every via point equals the start (to 1e-12 of the path's scale): "
-                         'there is nothing to move')
-    base = np.maximum(base, 1e-6 * base.max())
-    planners = {
-        'cubic': lambda durations: cubic_via(path, durations, velocities),
-        'quintic': lambda durations: quintic_via(path, durations, velocities),
-        'lspb': lambda durations: lspb_via(path, durations, blend_acceleration),
-    }
-    plan = planners[profile]
-    best = shortest_duration(lambda scale: plan(base * scale), 1.0,
-                             max_velocity, max_acceleration)
-    return base * (best.duration / base.sum())
 
 
 def _moving_min_time(

@@ -15,8 +15,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from traj_gen_ros.core.exact.unit_peaks import unit_peaks
-from traj_gen_ros.core.exact.unit_roots import roots_in_unit_interval
+from traj_gen_ros.core.exact.piece_extrema import derivative, peak_abs, position_extrema
 
 # Samples per piece above which each piece is evaluated as one matrix product.
 _SAMPLES_PER_PIECE_FOR_MATMUL = 16
@@ -106,7 +105,8 @@ class Trajectory:
         """
         Find the largest ``|velocity|`` and ``|acceleration|`` per joint, ``(joints,)`` each.
 
-        Extrema from the closed-form roots of the next derivative (:func:`peak_abs`): exact
+        Extrema from the closed-form roots of the next derivative
+        (:func:`~traj_gen_ros.core.exact.piece_extrema.peak_abs`): exact
         to rounding, not sampled estimates.
         """
         peak_velocity, peak_acceleration = self._peaks(2)
@@ -118,10 +118,10 @@ class Trajectory:
         return peak_velocity, peak_acceleration, peak_jerk
 
     def _peaks(self, orders: int) -> list[np.ndarray]:
-        """Exact peaks of the first ``orders`` derivatives, one :func:`peak_abs` call."""
-        series = [_derivative(self.coefficients)]
+        """Exact peaks of the first ``orders`` derivatives, in one call."""
+        series = [derivative(self.coefficients)]
         for _ in range(orders - 1):
-            series.append(_derivative(series[-1]))
+            series.append(derivative(series[-1]))
         return peak_abs(self._piece_durations(self.joint_count), *series)
 
     def _piece_durations(self, joint_count: int) -> np.ndarray:
@@ -132,7 +132,7 @@ class Trajectory:
 
     def peak_jerk(self) -> np.ndarray:
         """Largest ``|jerk|`` (rad/s³) per joint, ``(joints,)``: exact, from the coefficients."""
-        jerk = _derivative(_derivative(_derivative(self.coefficients)))
+        jerk = derivative(derivative(derivative(self.coefficients)))
         return peak_abs(self._piece_durations(self.joint_count), jerk)[0]
 
     def position_extrema(self) -> PositionExtrema:
@@ -140,38 +140,15 @@ class Trajectory:
         Find each joint's lowest and highest position and when it is reached, exactly.
 
         As Ruckig's ``Trajectory::get_position_extrema``: every extremum of a polynomial
-        piece lies at one of its ends or at a real root of its velocity. Each piece is
-        rescaled to unit time (``c_k L^k``, ``s = t / L``) and the real roots in
-        ``[0, 1]`` of every piece's velocity, all joints at once, come from
-        :func:`traj_gen_ros.core.exact.unit_roots.roots_in_unit_interval`. Every candidate
-        is a position the plan takes, and every extremum is a candidate: exact to
-        rounding, never a sampled estimate that could miss an overshoot. On a tie the
+        piece lies at one of its ends or at a real root of its velocity
+        (:func:`traj_gen_ros.core.exact.piece_extrema.position_extrema`). On a tie the
         earliest time is given. Positions in rad (or m), times in s, ``(joints,)`` each.
         """
-        pieces, size, joints = self.coefficients.shape
-        lengths = self._piece_durations(joints).reshape(-1)  # piece-major: piece·joints + j
-        starts = np.broadcast_to(self.breakpoints[:-1].reshape(pieces, -1),
-                                 (pieces, joints)).reshape(-1)
-        rows = np.moveaxis(self.coefficients, 1, 2).reshape(-1, size).copy()
-        for power in range(1, size):  # c_k L^k as c_k L … L: no L^k to overflow
-            rows[:, power:] *= lengths[:, None]
-        owners = [np.arange(rows.shape[0])] * 2
-        values, times = [rows[:, 0], rows.sum(axis=1)], [starts, starts + lengths]
-        if size > 2:
-            roots, of = roots_in_unit_interval(_without_end_roots(rows[:, 1:] *
-                                                                  np.arange(1.0, size)))
-            owners.append(of)
-            values.append(polyval(rows[of], roots[:, None])[:, 0])
-            times.append(starts[of] + roots * lengths[of])
-        joint = np.concatenate(owners) % joints
-        values, times = np.concatenate(values), np.concatenate(times)
-        # Sorted by joint, then value (rising for the minimum, falling for the maximum),
-        # then time: each joint's first entry is its extremum.
-        lowest = np.lexsort((times, values, joint))
-        highest = np.lexsort((times, -values, joint))
-        first = np.searchsorted(joint[lowest], np.arange(joints))
-        return PositionExtrema(values[lowest[first]], values[highest[first]],
-                               times[lowest[first]], times[highest[first]])
+        joints = self.joint_count
+        return PositionExtrema(*position_extrema(
+            np.broadcast_to(self.breakpoints[:-1].reshape(self.piece_count, -1),
+                            (self.piece_count, joints)),
+            self._piece_durations(joints), self.coefficients))
 
     def _sample_per_joint(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """
@@ -238,10 +215,10 @@ class Trajectory:
         """Position, velocity, acceleration coefficients, ``(pieces, 3, n + 1, joints)``."""
         coefficients = self._shared_pieces[1]
         tables = np.zeros((len(coefficients), 3) + coefficients.shape[1:])
-        derivative = coefficients
+        series = coefficients
         for order in range(3):
-            tables[:, order, :derivative.shape[1]] = derivative
-            derivative = _derivative(derivative)
+            tables[:, order, :series.shape[1]] = series
+            series = derivative(series)
         return tables
 
     def _sample_sorted(self, times: np.ndarray) -> np.ndarray:
@@ -362,62 +339,3 @@ def _falling_factorial(power: int, order: int) -> int:
     for step in range(order):
         factor *= power - step
     return factor
-
-
-def _derivative(coefficients: np.ndarray) -> np.ndarray:
-    """Ascending coefficients of the time derivative, same layout ``(pieces, n, joints)``."""
-    powers = np.arange(1, coefficients.shape[1], dtype=float)[None, :, None]
-    return coefficients[:, 1:] * powers
-
-
-def _without_end_roots(velocity: np.ndarray) -> np.ndarray:
-    """
-    Divide roots at ``s = 0`` and ``s = 1`` (up to double ones) out of ascending rows.
-
-    A piece that starts or ends at rest has its velocity's roots there; the ends are
-    extremum candidates anyway, and such roots would send the root finder to its slow,
-    eigenvalue path. ``p(s) = s q(s)`` shifts the coefficients; ``p(s) = (s - 1) q(s)``
-    has ``q``'s descending coefficients as the running sums of ``p``'s (synthetic division).
-    """
-    velocity = velocity.copy()
-    for _ in range(2):
-        scale = np.abs(velocity).max(axis=1)
-        start = (np.abs(velocity[:, 0]) <= 1e-12 * scale) & (scale > 0.0)
-        velocity[start, :-1], velocity[start, -1] = velocity[start, 1:], 0.0
-        end = (np.abs(velocity.sum(axis=1)) <= 1e-12 * scale) & (scale > 0.0)
-        quotient = np.cumsum(velocity[end, ::-1], axis=1)[:, :-1]
-        velocity[end, :-1], velocity[end, -1] = quotient[:, ::-1], 0.0
-    return velocity
-
-
-def polyval(coefficients: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """
-    Evaluate each row's ascending ``coefficients`` ``(rows, n + 1)`` at its ``points``.
-
-    ``points`` is ``(rows, k)``; returns ``(rows, k)`` values, by Horner's rule.
-    """
-    value = np.zeros_like(points)
-    for power in range(coefficients.shape[1] - 1, -1, -1):
-        value = value * points + coefficients[:, power][:, None]
-    return value
-
-
-def peak_abs(durations: np.ndarray, *series: np.ndarray) -> list[np.ndarray]:
-    """
-    Find the exact largest ``|p(t)|`` over every piece, per joint, for each of ``series``.
-
-    Each series is ``(pieces, n + 1, joints)`` coefficients in local time (``n ≤ 4``);
-    returns one ``(joints,)`` array per series. Every extremum lies at a piece end or
-    where ``p'`` vanishes: each piece is rescaled to unit time (``c_k L^k``) and
-    :func:`traj_gen_ros.core.exact.unit_peaks.unit_peaks` finds the roots of ``p'`` (degree
-    ≤ 3) in closed form, every series, piece and joint in one call.
-    """
-    pieces, joints = durations.shape
-    rows = np.zeros((len(series), pieces * joints, 5))
-    for index, coefficients in enumerate(series):
-        size = coefficients.shape[1]
-        if size:  # else a derivative of a constant: zero
-            scaled = coefficients * durations[:, None, :] ** np.arange(size)[None, :, None]
-            rows[index, :, :size] = scaled.transpose(0, 2, 1).reshape(-1, size)
-    peaks = unit_peaks(rows.reshape(-1, 5)).reshape(len(series), pieces, joints)
-    return list(peaks.max(axis=1, initial=0.0))
