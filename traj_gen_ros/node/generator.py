@@ -118,7 +118,8 @@ class TrajectoryGenerator(Node):
         self._node_clock = self.get_clock()  # ROS time: use_sim_time makes it follow /clock
         self._rate_meter = RateMeter(self._now_ns() * 1e-9)  # for /diagnostics
         # Speed scaling: the plan clock (node/speed_scaling.py), its inputs (speed_input.py).
-        self._time_map = TimeMap(self._config.max_acceleration, self._config.jerk_limit)
+        self._time_map = TimeMap(self._config.max_acceleration, self._config.jerk_limit,
+                                 origin_ns=self._now_ns())
         self._stream = Stream(held(initial), self._config.joints, self._now_ns,
                               lambda: self._config.period_ns,
                               self._rate_meter.wrap(publish), self.get_logger().error,

@@ -50,6 +50,8 @@ STEP_NS = 1_000_000
 MARGIN = 0.95
 #: Below this speed (rad/s) a joint sets no bound on ``ḟ``.
 RESTING = 1e-9
+#: Before this node time (ns) a question sets no origin (the schedule's "since forever").
+EARLIEST_NS = -(2 ** 61)
 #: ``f`` within this of ``f*`` is settled exactly there (under a jerk limit, with ``|ḟ|``
 #: within ``SETTLED_RATE`` 1/s: a step of ``ḟ`` that small changes the commanded
 #: acceleration by at most ``SETTLED_RATE · v_max``).
@@ -222,11 +224,14 @@ class TimeMap:
     """
 
     def __init__(self, max_acceleration: np.ndarray, max_jerk: np.ndarray | None = None,
-                 factor: float = 1.0, step_ns: int = STEP_NS) -> None:
+                 factor: float = 1.0, step_ns: int = STEP_NS,
+                 origin_ns: int | None = None) -> None:
         """
-        Start with ``f = f* = factor``; ``P = 0`` at the grid time of the first question.
+        Start with ``f = f* = factor`` and ``P = 0`` at ``origin_ns`` (the node's start).
 
-        (So ``P`` stays small, and ``P(t) - P(s)`` exact to ~1e-12 s for hours.)
+        So ``P`` stays small and ``P(t) - P(s)`` exact to ~1e-12 s for hours. ``None``:
+        at the first question about a time after ``EARLIEST_NS``. A question about a
+        time before the origin is answered as at the origin.
         """
         self.max_acceleration = np.asarray(max_acceleration, dtype=float)
         self.max_jerk = None if max_jerk is None else np.asarray(max_jerk, dtype=float)
@@ -234,6 +239,8 @@ class TimeMap:
         self.step_ns = step_ns
         self.version = 0
         self._base: Knot | None = None
+        if origin_ns is not None:
+            self._base = Knot(origin_ns - origin_ns % step_ns, 0.0, self.target)
         self._ahead: list[Knot] = []
 
     def set_limits(self, max_acceleration: np.ndarray, max_jerk: np.ndarray | None) -> None:
@@ -271,14 +278,18 @@ class TimeMap:
 
     def at(self, time_ns: int, plan_state: PlanState) -> tuple[float, float, float, float]:
         """``(P (s), f, ḟ (1/s), f̈ (1/s²))`` at node time ``time_ns`` (ns, >= committed)."""
-        return self._knot_before(time_ns, plan_state).at(time_ns)
+        knot = self._knot_before(time_ns, plan_state)
+        return knot.at(max(time_ns, knot.time_ns))
 
     def _is_settled(self, knot: Knot) -> bool:
         return knot.factor == self.target and knot.still
 
     def _knot_before(self, time_ns: int, plan_state: PlanState) -> Knot:
         if self._base is None:
+            if time_ns < EARLIEST_NS:  # "since forever": no origin from that
+                return Knot(time_ns, 0.0, self.target)
             self._base = Knot(time_ns - time_ns % self.step_ns, 0.0, self.target)
+        time_ns = max(time_ns, self._base.time_ns)
         grid = max(self._base.time_ns, time_ns - time_ns % self.step_ns)
         knot = self._base
         for ahead in self._ahead:

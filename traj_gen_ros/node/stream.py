@@ -158,13 +158,16 @@ class Stream:
 
     def set_factor(self, factor: float) -> list[PlannedMotion]:
         """
-        Ramp the speed scaling toward ``factor`` (in [0, 1]) from the next unpublished tick.
+        Ramp the speed scaling toward ``factor`` (in [0, 1]) from the last setpoint on.
+
+        From the first 1 ms grid time after the last setpoint published: the next tick
+        already shows it.
 
         Returns the delayed motions dropped because the change moved the state they were
         planned from (:meth:`Schedule.set_factor`).
         """
         with self._lock:
-            from_ns = max(self._next_tick_ns, self._last_published_ns + 1)
+            from_ns = self._last_published_ns + 1
             return self._schedule.set_factor(factor, from_ns, FACTOR_DEFER_NS)
 
     def set_scaling_limits(self, max_acceleration: np.ndarray,
