@@ -13,6 +13,9 @@ that only stores the position, published at the next tick: the floor for "one pe
   (10-point positions-only goals, from rest and as continuation goals 0.1 s into the
   previous one), at 100 and 500 Hz, beside the ``~/goal`` rows (where control_msgs is
   importable; judged from sending: the action's arrival at the node is not reported);
+* speed scaling (issue 23): a ``~/speed_scaling_input`` factor sent (0.9 and 1.0 in turn,
+  mid-cruise) -> the first ``joint_states`` whose velocity changed (its stamp, and when it
+  arrived here), p50/p99, at 100 and 500 Hz; skipped where control_msgs is missing.
 * the 500 Hz ``joint_states`` period (stamps) p50/p99/max: idle, under a 1 kHz goal flood
   (benchmarks/flood.py's flooder), and beside one busy process per core; the bare timer
   idle and beside the busy processes.
@@ -57,9 +60,10 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint  # noqa: E
 
 try:
     from control_msgs.action import FollowJointTrajectory  # noqa: E402
+    from control_msgs.msg import SpeedScalingFactor  # noqa: E402
     from rclpy.action import ActionClient  # noqa: E402
-except ImportError:  # no control_msgs: no action rows
-    FollowJointTrajectory = None
+except ImportError:  # no control_msgs: no action and speed scaling rows
+    FollowJointTrajectory = SpeedScalingFactor = None
 
 # node_harness picked a domain from this pid; the --bare child keeps its parent's.
 os.environ['ROS_DOMAIN_ID'] = os.environ.setdefault('NODE_LATENCY_DOMAIN',
@@ -351,6 +355,43 @@ def long_plan(recorder: Recorder, repeats: int) -> dict:
     return summary(rows)
 
 
+def speed_factor(recorder: Recorder, repeats: int) -> dict:
+    """
+    Factors 0.9 / 1.0 sent mid-cruise -> the first joint_states whose velocity changed (ms).
+
+    A 20 rad goal cruises at ``max_velocity`` for seconds; each factor's ramp (0.1 at
+    ``σ a_max / v``: ~50 ms) is waited out before the next.
+    """
+    publisher = recorder.create_publisher(
+        SpeedScalingFactor, f'{GENERATOR}/speed_scaling_input',
+        QoSProfile(depth=1, reliability=RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    recorder.spin_until(lambda: publisher.get_subscription_count() >= 2)
+    recorder.goal.publish(goal_message(20.0))
+
+    def velocity(row) -> float:
+        return deserialize_message(row[2], JointState).velocity[0]
+
+    def changed(first: int, before: float):
+        return next((row for row in recorder.states[first:]
+                     if abs(velocity(row) - before) > 1e-9), None)
+    recorder.spin_for(1.5)  # into the cruise
+    published, received = [], []
+    for index in range(repeats):
+        before = velocity(recorder.states[-1])
+        first = len(recorder.states)
+        sent = time.time_ns()
+        publisher.publish(SpeedScalingFactor(factor=0.9 if index % 2 == 0 else 1.0))
+        recorder.spin_until(lambda first=first, before=before:
+                            changed(first, before) is not None)
+        row = changed(first, before)
+        published.append((row[1] - sent) * 1e-6)
+        received.append((row[0] - sent) * 1e-6)
+        recorder.spin_for(0.15)
+    recorder.goal.publish(goal_message(0.0))
+    return {'stream_changed_ms': percentiles(published),
+            'stream_change_received_ms': percentiles(received)}
+
+
 def periods(recorder: Recorder, seconds: float) -> dict:
     """Measure how far apart the joint_states stamps are (ms) over ``seconds``."""
     recorder.spin_until(lambda: len(recorder.states) > 50)
@@ -396,6 +437,10 @@ def reaction(args: argparse.Namespace, results: dict) -> None:
             if FollowJointTrajectory is not None:
                 for name, row in action_rows(recorder, args.repeats).items():
                     results[f'action_{name}_{rate:g}hz'] = row
+            if SpeedScalingFactor is not None:
+                recorder.set_parameters(profile='lspb')
+                recorder.wait_at_rest()
+                results[f'speed_factor_{rate:g}hz'] = speed_factor(recorder, args.repeats)
         finally:
             stop(process)
             recorder.destroy_node()
@@ -486,6 +531,13 @@ def report(results: dict) -> None:
           'published; ms p50/p99:')
     for key, entry in results.items():
         if key.startswith(('from_rest', 'preempting', 'bare', 'via', 'action')):
+            cells = [f'{name.replace("_ms", "")} {value["p50"]:.2f}/{value["p99"]:.2f}'
+                     for name, value in entry.items()]
+            print(f'  {key:<28} ' + '; '.join(cells))
+    print('~/speed_scaling_input factor sent -> first joint_states with the new velocity '
+          '(published = its stamp; received here), ms p50/p99:')
+    for key, entry in results.items():
+        if key.startswith('speed_factor'):
             cells = [f'{name.replace("_ms", "")} {value["p50"]:.2f}/{value["p99"]:.2f}'
                      for name, value in entry.items()]
             print(f'  {key:<28} ' + '; '.join(cells))

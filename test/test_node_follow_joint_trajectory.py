@@ -345,3 +345,30 @@ def test_a_burst_of_goals_and_cancels(session, rest):
     assert statuses[-1] == GoalStatus.STATUS_SUCCEEDED
     probe.wait_at_rest()
     assert_continuous(probe, begin)
+
+
+def test_a_goal_slowed_by_speed_scaling_runs_twice_as_long_and_succeeds(session, rest):
+    probe, _ = session
+    q = np.array([rest, rest + [0.2, 0, 0, 0, 0, -0.1]])
+    probe.require_parameters(speed_scaling=0.5)
+    try:
+        count = len(probe.trajectories)
+        handle = send(session, [(q[0], 0.0), (q[1], 1.0)])
+        status, code, text = result(session, handle, timeout=30.0)
+        assert (status, code, text) == (GoalStatus.STATUS_SUCCEEDED, Result.SUCCESSFUL, '')
+        plan = started(probe, count)
+        start = stamp_ns(plan.header.stamp)
+        assert seconds_of_plan(plan) == pytest.approx(1.0, abs=1e-9)  # ~/trajectory: unscaled
+        final = probe.wait_at_rest(timeout=10)
+        assert np.allclose(final, q[1], atol=1e-12)
+        times, positions, _ = probe.states_between(start, start + int(4e9))
+        arrived = times[np.flatnonzero(np.abs(positions[:, 0] - q[1, 0]) <= 1e-9)[0]]
+        assert arrived == pytest.approx(2.0, abs=0.05)  # the plan at f = 0.5
+        assert_continuous(probe, start)
+    finally:
+        probe.require_parameters(speed_scaling=1.0)
+
+
+def seconds_of_plan(plan) -> float:
+    last = plan.points[-1].time_from_start
+    return last.sec + last.nanosec * 1e-9

@@ -106,6 +106,7 @@ class ActiveGoal:
     brake_start_ns: int | None = None
     replaced: str = ''
     feedback_ns: int = -(2 ** 62)
+    at_rest_ns: int | None = None  # the first setpoint published at the end, at rest
 
 
 class FollowJointTrajectoryServer:
@@ -317,17 +318,33 @@ class FollowJointTrajectoryServer:
                     not self._stream.moving_at(published_ns):
                 self._finish(active, CANCELED, SUCCESSFUL, 'canceled: braked to rest')
             return
-        desired, _ = self._stream.start_state(now_ns)
+        desired = self._stream.setpoint(max(now_ns, published_ns))  # commanded: scaled
         measured = self.measured_positions()
         self._feedback(active, now_ns, desired, measured)
         ended = outcome(active.tolerances, active.goal.request.joints, self._config().joints,
-                        (active.start_ns, active.end_ns, now_ns, published_ns),
+                        (active.start_ns, self._end_ns(active, now_ns, published_ns), now_ns,
+                         published_ns),
                         desired.position, active.target, measured,
                         self.measured_velocities, active.goal.slowed)
         if ended is not None:
             self._finish(active, *ended)
             if ended[1] == PATH_TOLERANCE_VIOLATED:
                 self.reseed_to_measured()
+
+    def _end_ns(self, active: ActiveGoal, now_ns: int, published_ns: int) -> int:
+        """
+        Return when the goal's motion ends (ns): its planned end, later if it was slowed.
+
+        With speed scaling (``speed_scaling``) the plan runs on its own clock: the end is
+        the first setpoint the stream publishes at rest after the goal started, and the
+        goal-time check counts from there (a slowed goal is not failed for being slow).
+        At a factor of 1 that is the planned end's tick.
+        """
+        if active.at_rest_ns is None:
+            if published_ns < active.start_ns or self._stream.moving_at(published_ns):
+                return max(active.end_ns, now_ns + 1)
+            active.at_rest_ns = published_ns
+        return max(active.end_ns, active.at_rest_ns)
 
     def abort_active(self, reason: str) -> None:
         """End the running goal ABORTED with ``reason``: the measured state was lost."""

@@ -81,6 +81,8 @@ from traj_gen_ros.node.realtime import (
 from traj_gen_ros.node.request_handler import REQUEST_DEPTH, RequestHandler
 from traj_gen_ros.node.request_thread import NotForTheExecutor, RequestThread
 from traj_gen_ros.node.robot_description import NodeLimits
+from traj_gen_ros.node.speed_input import SpeedScalingInput
+from traj_gen_ros.node.speed_scaling import TimeMap
 from traj_gen_ros.node.stream import Stream
 from traj_gen_ros.node.wire import joint_trajectory_cdr
 from trajectory_msgs.msg import JointTrajectory
@@ -118,12 +120,17 @@ class TrajectoryGenerator(Node):
                     if command_topic else None)
         self._node_clock = self.get_clock()  # ROS time: use_sim_time makes it follow /clock
         self._rate_meter = RateMeter(self._now_ns() * 1e-9)  # for /diagnostics
+        # Speed scaling: the plan clock (node/speed_scaling.py), its inputs (speed_input.py).
+        self._time_map = TimeMap(self._config.max_acceleration, self._config.jerk_limit,
+                                 origin_ns=self._now_ns())
         self._stream = Stream(held(initial), self._config.joints, self._now_ns,
                               lambda: self._config.period_ns,
                               self._rate_meter.wrap(publish), self.get_logger().error,
                               waiting=measured is not None,
                               publish_command=(commands if command_message is Float64MultiArray
-                                               else None))
+                                               else None),
+                              time_map=self._time_map,
+                              publish_factor=SpeedScalingInput.output(self))
         self.context.on_shutdown(self._stream.stopping.set)  # SIGINT/SIGTERM: stream ends
         self._answers = CountingAnswers(self, lambda: self._config.joints)
         self._requests = RequestHandler(
@@ -155,12 +162,13 @@ class TrajectoryGenerator(Node):
             self._now_ns)
         if self.follow_joint_trajectory is not None and self.feedback is not None:
             self._wire_measured_state(self.follow_joint_trajectory, self.feedback)
+        self.speed_scaling = SpeedScalingInput(self, self._stream)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._diagnostics = NodeDiagnostics(
             self, lambda: self._config, self._limits, self._answers, self._rate_meter,
-            lambda: self._stream.start_state(self._stream.last_published())[0].position,
-            measured.status if measured else None)
+            lambda: self._stream.setpoint(self._stream.last_published()).position,
+            self._status_with_speed(measured))
         self._diagnostics.check_ranges()  # a start outside the limits is said at once
         self._answers.trajectory(0, held(initial), self._config.rate_hz)  # warm up
         priority = self._stream.start()
@@ -204,6 +212,14 @@ class TrajectoryGenerator(Node):
         return MeasuredState(self._config.joints, resolved,
                              self.get_parameter('state_tolerance').value,
                              self.get_parameter('joint_topic_timeout').value)
+
+    def _status_with_speed(self, measured: MeasuredState | None
+                           ) -> Callable[[], tuple[int, str, list[tuple[str, str]]]]:
+        """Give the ``/diagnostics`` part after the limits: the measured state's, the speed's."""
+        def status() -> tuple[int, str, list[tuple[str, str]]]:
+            level, problem, values = measured.status() if measured else (0, '', [])
+            return level, problem, values + self.speed_scaling.values()
+        return status
 
     # ------------------------------------------------------------------ requests
 
@@ -249,11 +265,15 @@ class TrajectoryGenerator(Node):
             make_config(**values)
         except ValueError as error:
             return SetParametersResult(successful=False, reason=str(error))
-        return SetParametersResult(successful=True)
+        reason = SpeedScalingInput.check(parameters)
+        return SetParametersResult(successful=reason is None, reason=reason or '')
 
     def _apply_parameters(self, parameters: list[Parameter]) -> None:
-        del parameters
         self._config = self._read_config()  # the stream reads the period every tick
+        if hasattr(self, 'speed_scaling'):  # not while the node is being built
+            self._stream.set_scaling_limits(self._config.max_acceleration,
+                                            self._config.jerk_limit)
+            self.speed_scaling.apply(parameters)
 
     def destroy_node(self) -> None:
         """Stop the request and stream threads, then destroy the node."""

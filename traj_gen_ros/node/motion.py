@@ -30,12 +30,19 @@ class State(NamedTuple):
 
 @dataclass(frozen=True)
 class PlannedMotion:
-    """An accepted plan, where it ends (rad, at rest) and the words its status reports."""
+    """
+    An accepted plan, where it ends (rad, at rest) and the words its status reports.
+
+    ``unscaled``: the plan runs on the node clock whatever the speed scaling factor
+    (``~/stop``, an action cancel: braking at full authority); every other plan's own
+    time advances at the factor (:mod:`traj_gen_ros.node.speed_scaling`).
+    """
 
     plan: Trajectory
     profile: str
     end: np.ndarray
     note: str = ''
+    unscaled: bool = False
 
 
 def held(position: Sequence[float], profile: str = 'hold', note: str = '') -> PlannedMotion:

@@ -40,7 +40,7 @@ DEFAULT_JOINTS = [f'joint_{index}' for index in range(1, 7)]
 PER_JOINT = 'one value for all joints or one per joint'
 #: Parameters declared as doubles: an integer is stored as a double.
 DOUBLES = ('rate_hz', 'joint_topic_timeout', 'allowed_start_tolerance', 'goal_time_tolerance',
-           'stopped_velocity_tolerance')
+           'stopped_velocity_tolerance', 'speed_scaling')
 #: Per-joint parameters, declared as double arrays: one number is stored as ``[number]``.
 DOUBLE_ARRAYS = ('initial_positions', 'max_velocity', 'max_acceleration', 'lspb_acceleration',
                  'max_jerk', 'min_position', 'max_position', 'state_tolerance', 'path_tolerance',
@@ -137,6 +137,18 @@ def descriptors(joint_count: int) -> dict[str, tuple[object, ParameterDescriptor
                         'requests until it returns; 0: never (read only).',
             type=ParameterType.PARAMETER_DOUBLE, read_only=True,
             floating_point_range=[FloatingPointRange(from_value=0.0, to_value=3600.0)])),
+        'speed_scaling': (1.0, ParameterDescriptor(
+            description='Speed override: the running plan advances at this times the clock '
+                        '(times ~/speed_scaling_input); 0 pauses, 1 is full speed.',
+            type=ParameterType.PARAMETER_DOUBLE,
+            additional_constraints='a finite number in [0, 1]',
+            floating_point_range=[FloatingPointRange(from_value=0.0, to_value=1.0)])),
+        'speed_scaling_output_topic': ('', ParameterDescriptor(
+            description='Forward the speed scaling factor in force (control_msgs/'
+                        'SpeedScalingFactor) to a joint_trajectory_controller, e.g. '
+                        '/joint_trajectory_controller/speed_scaling_input; empty: none '
+                        '(read only).',
+            type=ParameterType.PARAMETER_STRING, read_only=True)),
         'state_tolerance': ([DEFAULT_STATE_TOLERANCE], ParameterDescriptor(
             description=f'Measured position farther than this from the held setpoint while '
                         f'idle: hold where the arm is ({PER_JOINT}; each >= 0, 0: never; '

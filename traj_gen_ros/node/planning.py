@@ -308,13 +308,16 @@ def plan_stop(config: Config, state: State) -> PlannedMotion:
     With profile ``scurve`` the jerk stays within ``max_jerk`` (rad/s³) and the
     acceleration is continuous from the state's (:func:`traj_gen_ros.core.jerk_limited.brake`);
     the other profiles brake at ``max_acceleration`` at once (:func:`traj_gen_ros.brake`).
+    ``state`` is the commanded state (the speed scaling factor applied): the brake is
+    ``unscaled`` and runs on the node clock.
     """
     if config.profile == 'scurve':
         plan = scurve_brake(state.position, state.velocity, state.acceleration,
                             config.max_acceleration, config.max_jerk)
     else:
         plan = brake(state.position, state.velocity, config.max_acceleration)
-    return PlannedMotion(plan, 'stop', plan.sample(plan.duration)[0][0])
+    # Never slowed by the speed scaling factor: it brakes at full authority.
+    return PlannedMotion(plan, 'stop', plan.sample(plan.duration)[0][0], unscaled=True)
 
 
 def check_size(motion: PlannedMotion, config: Config) -> PlannedMotion:

@@ -254,7 +254,10 @@ class RequestHandler:
         for attempt in range(PLAN_ATTEMPTS):
             began = self._elapsed_ns()
             now_ns = self._now_ns()
-            state, hold_at = self._stream.start_state(start_ns)
+            # A brake plans from the commanded state, the rest from the plan's own (speed
+            # scaling: docs/node.md).
+            state, hold_at = self._stream.start_state(
+                start_ns, scaled=not getattr(plan, 'unscaled', False))
             try:
                 motion = plan(config, state, hold_at, request.request)
             except RequestError as error:
@@ -296,7 +299,7 @@ class RequestHandler:
         """Brake from the next tick (after a failure, or when the measured state is lost)."""
         for _ in range(PLAN_ATTEMPTS):
             start_ns = self._stream.next_start()
-            state, _ = self._stream.start_state(start_ns)
+            state, _ = self._stream.start_state(start_ns, scaled=False)
             try:
                 motion = plan_stop(config, state)
             except ValueError as error:  # a non-finite state: the stream holds its last
@@ -322,7 +325,7 @@ class RequestHandler:
         with self._lock:
             for _ in range(PLAN_ATTEMPTS):
                 start_ns = self._stream.next_start()
-                state, _ = self._stream.start_state(start_ns)
+                state, _ = self._stream.start_state(start_ns, scaled=False)
                 position = target(state, self._stream.moving_at(start_ns))
                 if position is None:
                     return False
@@ -348,6 +351,10 @@ def brake_planner(config: Config, state: State, hold_at: np.ndarray, parsed: Non
     """Plan ``~/stop``: brake from ``state`` and hold (:func:`plan_stop`; a :data:`Planner`)."""
     del hold_at, parsed  # a stop ends where braking ends
     return plan_stop(config, state)
+
+
+#: A planner marked ``unscaled`` plans from the commanded state and is never slowed.
+brake_planner.unscaled = True
 
 
 def goal_request(data: bytes, received: int, joints: Sequence[str],

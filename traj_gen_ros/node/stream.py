@@ -12,6 +12,14 @@ stream has published nothing after it. So every setpoint published is the old mo
 before the switch or the new one's after it (the last published setpoint, exactly both),
 and position, velocity and acceleration are continuous at the switch.
 
+Speed scaling (:mod:`traj_gen_ros.node.speed_scaling`): the schedule's scaled motions run
+on the plan clock of a :class:`~traj_gen_ros.node.speed_scaling.TimeMap`; :meth:`Stream.set_factor`
+ramps it toward a new factor from the next tick not yet published, every published tick
+fixes the ramp up to it, and a request is planned from the running plan's own state
+(:meth:`Stream.start_state`). A plan whose start state a factor change moved since it was
+planned is not spliced (the request is planned again). :meth:`Stream.plan_elapsed` tells
+how much plan time has passed (an action's feedback and goal-time check).
+
 On a busy machine the thread asks for a real-time priority (``SCHED_FIFO``) and, if that
 is not permitted, a lower nice value; if neither is, it runs as it is
 (:func:`traj_gen_ros.node.realtime.raise_priority`). Requests and planning run on the
@@ -28,7 +36,11 @@ import numpy as np
 from traj_gen_ros.node.motion import held, PlannedMotion, State
 from traj_gen_ros.node.realtime import raise_priority
 from traj_gen_ros.node.schedule import Schedule
+from traj_gen_ros.node.speed_scaling import TimeMap
 from traj_gen_ros.node.wire import float64_multi_array_cdr, joint_names_cdr, joint_state_cdr
+
+#: A factor change waits for a motion spliced to start within this long (ns).
+FACTOR_DEFER_NS = 500_000_000
 
 
 class Stream:
@@ -38,7 +50,9 @@ class Stream:
                  now_ns: Callable[[], int], period_ns: Callable[[], int],
                  publish: Callable[[bytes], None], on_error: Callable[[str], None],
                  waiting: bool = False,
-                 publish_command: Callable[[bytes], None] | None = None) -> None:
+                 publish_command: Callable[[bytes], None] | None = None,
+                 time_map: TimeMap | None = None,
+                 publish_factor: Callable[[float], None] | None = None) -> None:
         """
         Prepare to stream ``first`` (a hold); :meth:`start` starts the thread.
 
@@ -51,8 +65,15 @@ class Stream:
         :param publish_command: sends the same setpoint's positions as a serialised
             ``Float64MultiArray`` (``command_out_topic``), or None.
         :param on_error: logs a failed publish (the stream goes on).
+        :param time_map: the speed scaling ramp and plan clock (None: a factor of 1).
+        :param publish_factor: forwards the effective factor when it changes (from the
+            stream thread; ``speed_scaling_output_topic``), or None.
         """
-        self._schedule = Schedule(first)
+        self._time_map = time_map if time_map is not None else TimeMap(np.ones(1))
+        self._schedule = Schedule(first, self._time_map)
+        self._publish_factor = publish_factor
+        self._forwarded = -1.0  # the factor last forwarded
+        self._versions: dict[int, int] = {}  # per thread: the ramp version start_state saw
         self._last_position = first.end.copy()  # the last setpoint published (rad)
         self._names_cdr = joint_names_cdr(list(joint_names))
         self._now_ns = now_ns
@@ -90,7 +111,7 @@ class Stream:
     def seed(self, position: np.ndarray) -> None:
         """Replace the schedule by a hold at ``position`` (rad) and start publishing."""
         with self._lock:
-            self._schedule = Schedule(held(position))
+            self._schedule = Schedule(held(position), self._time_map)
             self._last_position = np.array(position, dtype=float)
             self._waiting = False
 
@@ -113,10 +134,64 @@ class Stream:
             tick += -(-(earliest - tick) // period_ns) * period_ns
         return tick
 
-    def start_state(self, time_ns: int) -> tuple[State, np.ndarray]:
-        """Return the setpoint at ``time_ns`` and where the schedule rests (rad) after it."""
+    def start_state(self, time_ns: int, scaled: bool = True) -> tuple[State, np.ndarray]:
+        """
+        Return the state to plan from at ``time_ns`` and where the schedule rests (rad).
+
+        ``scaled`` (a goal, via points): the running plan's own state, where a scaled
+        motion spliced at ``time_ns`` starts (:meth:`Schedule.scaled_start`); else (a
+        brake) the commanded setpoint. The ramp's version is noted for :meth:`splice`.
+        """
         with self._lock:
-            return self._schedule.setpoint(time_ns), self._schedule.end_position(time_ns)
+            schedule = self._schedule
+            self._versions[threading.get_ident()] = self._time_map.version
+            if scaled:
+                state = schedule.plan_state(schedule.scaled_start(time_ns))
+            else:
+                state = schedule.setpoint(time_ns)
+            return state, schedule.end_position(time_ns)
+
+    def setpoint(self, time_ns: int) -> State:
+        """Return the commanded setpoint at ``time_ns`` (not before the last published)."""
+        with self._lock:
+            return self._schedule.setpoint(time_ns)
+
+    def set_factor(self, factor: float) -> list[PlannedMotion]:
+        """
+        Ramp the speed scaling toward ``factor`` (in [0, 1]) from the last setpoint on.
+
+        From the first 1 ms grid time after the last setpoint published: the next tick
+        already shows it.
+
+        Returns the delayed motions dropped because the change moved the state they were
+        planned from (:meth:`Schedule.set_factor`).
+        """
+        with self._lock:
+            from_ns = self._last_published_ns + 1
+            return self._schedule.set_factor(factor, from_ns, FACTOR_DEFER_NS)
+
+    def set_scaling_limits(self, max_acceleration: np.ndarray,
+                           max_jerk: np.ndarray | None) -> None:
+        """Ramp within ``max_acceleration`` (rad/s²) and ``max_jerk`` (rad/s³, or None)."""
+        with self._lock:
+            self._time_map.set_limits(max_acceleration, max_jerk)
+
+    def factor_in_force(self) -> float:
+        """Return the effective (ramped) factor at the last published setpoint."""
+        with self._lock:
+            return self._schedule.factor_at(max(self._last_published_ns, 0))
+
+    def plan_elapsed(self, start_ns: int, now_ns: int) -> float:
+        """
+        Plan time (s) a scaled motion started at ``start_ns`` has run by ``now_ns``.
+
+        ``∫ f dt`` from ``start_ns`` to ``now_ns`` (the node clock, ns): equal to
+        ``(now_ns - start_ns) · 1e-9`` at a factor of 1, less when slowed, constant while
+        paused. ``now_ns`` at or after the last published setpoint; ``start_ns`` too, or
+        a time since the last change of the factor asked for.
+        """
+        with self._lock:
+            return self._schedule.plan_elapsed(start_ns, now_ns)
 
     def moving_at(self, time_ns: int) -> bool:
         """Tell whether the schedule is in motion at ``time_ns`` (a plan not yet at its end)."""
@@ -144,6 +219,11 @@ class Stream:
         with self._lock:
             if self._last_published_ns > start_ns:
                 return None
+            if self._versions.pop(threading.get_ident(), None) not in (
+                    None, self._time_map.version):
+                return None  # the factor changed since it was planned: plan it again
+            if not motion.unscaled and motion.plan.duration > 0.0:
+                start_ns = self._schedule.scaled_start(start_ns)
             first_ns = start_ns
             if self._last_published_ns == start_ns:
                 first_ns = self._next_tick_ns
@@ -213,6 +293,8 @@ class Stream:
             if now_ns <= self._last_published_ns or self._waiting:
                 return  # the clock has not moved on (simulated time), or nothing to stream
             state = self._schedule.setpoint(now_ns)
+            self._schedule.commit(now_ns)
+            factor = self._schedule.factor_at(now_ns) if self._publish_factor else 0.0
             position, velocity = state.position, state.velocity
             finite = np.count_nonzero(np.isfinite(position)) + \
                 np.count_nonzero(np.isfinite(velocity)) == 2 * position.size
@@ -227,5 +309,8 @@ class Stream:
         self._publish(joint_state_cdr(now_ns, self._names_cdr, position, velocity))
         if self._publish_command is not None:
             self._publish_command(float64_multi_array_cdr(position))
+        if self._publish_factor is not None and factor != self._forwarded:
+            self._forwarded = factor
+            self._publish_factor(factor)
         with self._published:
             self._published.notify_all()

@@ -1,0 +1,124 @@
+"""
+The speed override's ROS side: the ``speed_scaling`` parameter, ``~/speed_scaling_input``.
+
+The logic (the inputs, the ramp, the plan clock) is :mod:`traj_gen_ros.node.speed_scaling`;
+this module reads the inputs and hands their product to the stream
+(:meth:`traj_gen_ros.node.stream.Stream.set_factor`):
+
+* ``speed_scaling`` (double in [0, 1], run-time changeable): checked in the node's
+  parameter callback (:meth:`SpeedScalingInput.check`: a value outside [0, 1] or not
+  finite is refused with the reason), applied after it (:meth:`SpeedScalingInput.apply`);
+* ``~/speed_scaling_input`` (``control_msgs/msg/SpeedScalingFactor``, as a
+  ``joint_trajectory_controller`` names it) where control_msgs is importable: two
+  subscriptions, one reliable and transient local (it takes a transient-local
+  publisher's latched value at start-up; it matches no volatile publisher) and one best
+  effort and volatile (it matches every publisher); a message that both deliver is taken
+  once (a message no newer by its source timestamp than the last taken is skipped). A
+  factor outside [0, 1] or not finite is ignored, logged and counted on ``/diagnostics``;
+* ``speed_scaling_output_topic`` (read only, '' = none): the effective factor, as it
+  ramps, forwarded as ``SpeedScalingFactor`` (reliable, transient local) to a
+  ``joint_trajectory_controller``'s ``speed_scaling_input`` when the commands out are
+  its plans (``command_out_type`` ``trajectory_msgs/JointTrajectory``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+import struct
+
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from traj_gen_ros.node.speed_scaling import check_factor, FactorInputs
+from traj_gen_ros.node.stream import Stream
+
+try:
+    from control_msgs.msg import SpeedScalingFactor
+except ImportError:  # control_msgs not built: the parameter alone
+    SpeedScalingFactor = None
+
+INPUT_TOPIC = '~/speed_scaling_input'
+#: The CDR encapsulation header of a little-endian message.
+_CDR_LE = b'\x00\x01\x00\x00'
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+ANY = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT,
+                 durability=DurabilityPolicy.VOLATILE)
+
+
+def factor_cdr(factor: float) -> bytes:
+    """Serialise a ``control_msgs/SpeedScalingFactor`` (one float64) to CDR bytes."""
+    return _CDR_LE + struct.pack('<d', factor)
+
+
+class SpeedScalingInput:
+    """The two inputs of the factor, its output, and what ``/diagnostics`` shows of them."""
+
+    def __init__(self, node: Node, stream: Stream) -> None:
+        """Read ``speed_scaling``; subscribe to the topic where control_msgs is importable."""
+        self._node = node
+        self._stream = stream
+        self.inputs = FactorInputs(node.get_parameter('speed_scaling').value)
+        self.available = SpeedScalingFactor is not None
+        self._last_source_ns = -1
+        if self.available:
+            for qos in (LATCHED, ANY):
+                node.create_subscription(SpeedScalingFactor, INPUT_TOPIC, self._on_message,
+                                         qos)
+        self._apply()
+
+    @staticmethod
+    def output(node: Node) -> Callable[[float], None] | None:
+        """Return a ``speed_scaling_output_topic`` publish taking a factor, or None."""
+        topic = node.get_parameter('speed_scaling_output_topic').value
+        if not topic:
+            return None
+        if SpeedScalingFactor is None:
+            raise ValueError(f'speed_scaling_output_topic {topic!r} needs control_msgs, '
+                             'which is not importable here')
+        publisher = node.create_publisher(SpeedScalingFactor, topic, LATCHED)
+        return lambda factor: publisher.publish(factor_cdr(factor))
+
+    @staticmethod
+    def check(parameters: list[Parameter]) -> str | None:
+        """Say why a ``speed_scaling`` value among ``parameters`` is refused, or None."""
+        for parameter in parameters:
+            if parameter.name == 'speed_scaling':
+                try:
+                    check_factor(parameter.value)
+                except ValueError as error:
+                    return str(error)
+        return None
+
+    def apply(self, parameters: list[Parameter]) -> None:
+        """Take an accepted ``speed_scaling`` value (after the parameter callback)."""
+        for parameter in parameters:
+            if parameter.name == 'speed_scaling':
+                self.inputs.parameter = float(parameter.value)
+                self._apply()
+
+    def _on_message(self, message: object, info: dict) -> None:
+        source_ns = info.get('source_timestamp', 0)
+        if 0 < source_ns <= self._last_source_ns:
+            return  # the same message through the other subscription, or an older one
+        self._last_source_ns = max(self._last_source_ns, source_ns)
+        ignored = self.inputs.take_message(message.factor)
+        if ignored is not None:
+            self._node.get_logger().warning(f'{ignored}: ignored',
+                                            throttle_duration_sec=1.0)
+            return
+        self._apply()
+
+    def _apply(self) -> None:
+        dropped = self._stream.set_factor(self.inputs.product)
+        if dropped:
+            self._node.get_logger().warning(
+                f'speed scaling changed before {len(dropped)} delayed motion(s) started '
+                'from a state the change moved: dropped (they would jump); resend them')
+
+    def values(self) -> list[tuple[str, str]]:
+        """Give the ``/diagnostics`` key/values: both inputs, the factor in force."""
+        values = self.inputs.values(self._stream.factor_in_force())
+        if not self.available:
+            values.append(('speed_scaling_input', 'control_msgs not importable: no topic'))
+        return values

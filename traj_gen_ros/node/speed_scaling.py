@@ -1,0 +1,347 @@
+"""
+The speed override: the factor in force, its ramp, and the map from node time to plan time.
+
+Two inputs set the factor asked for (:class:`FactorInputs`): the ``speed_scaling``
+parameter (the operator's slider) and the ``~/speed_scaling_input`` topic (what the robot
+or a program asks), each in ``[0, 1]``; the factor asked for is their product ``f*``.
+
+A scaled plan runs on its own time ``τ``, which advances at ``f`` times the node clock
+``t``: ``dτ/dt = f(t)``. What is commanded from the plan's own position ``p(τ)``,
+velocity ``v(τ)``, acceleration ``a(τ)`` and jerk ``j(τ)`` is (chain rule)
+
+* velocity ``f · v(τ)``,
+* acceleration ``f² · a(τ) + ḟ · v(τ)``,
+* jerk ``f³ · j(τ) + 3 f ḟ · a(τ) + f̈ · v(τ)``.
+
+So ``f`` itself is never stepped: :class:`TimeMap` ramps the effective factor ``f(t)``
+toward ``f*`` on a grid of ``STEP_NS`` and integrates the plan clock ``P(t) = ∫ f dt``
+(exactly: ``f`` is a polynomial on each step). The slope ``ḟ`` on each step is the one
+toward ``f*`` that the closed-form bound :func:`rate_bounds` allows for every joint at
+the step's start: ``|f² a + ḟ v| <= max(σ a_max, f² |a|)`` (``σ = MARGIN``), an interval
+of ``ḟ`` that always holds 0; where the plan itself uses the limit the ramp waits, where
+it leaves room the ramp takes it. Under ``scurve`` (a jerk limit) ``ḟ`` is continuous:
+``f̈`` is bounded by the jerk interval (:func:`jerk_bounds`) and ``ḟ`` kept inside the
+acceleration interval.
+
+**How long a pause takes.** Pausing (``f* = 0``), ``ḟ <= 0`` is as steep as the binding
+joint allows, so that joint's commanded acceleration is ``-σ a_max`` (against its
+velocity) all along: its commanded speed ``f |v|`` falls at ``σ a_max``. For a plan whose
+joints move in step (a goal from rest, a synchronised goal, via points of one joint) the
+binding joint does not change, so from full speed the pause takes at most
+``T <= max_j v_max_j / (σ a_max_j)`` (plus one step; under ``scurve`` the jerk-limited
+start and end of the slope add about ``a_max / j_max``). Where the plan already brakes
+at its limit, the plan itself comes to rest first.
+
+No ROS here. Units: rad (or m), rad/s, rad/s², rad/s³, s; ns where named.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+import math
+
+import numpy as np
+from traj_gen_ros.core.trajectory import state_at, Trajectory
+
+#: The ramp's grid (ns): ``ḟ`` (or ``f̈``) is constant on each step.
+STEP_NS = 1_000_000
+#: The fraction ``σ`` of ``max_acceleration`` / ``max_jerk`` a ramp may use.
+MARGIN = 0.95
+#: Below this speed (rad/s) a joint sets no bound on ``ḟ``.
+RESTING = 1e-9
+#: Before this node time (ns) a question sets no origin (the schedule's "since forever").
+EARLIEST_NS = -(2 ** 61)
+#: ``f`` within this of ``f*`` is settled exactly there (under a jerk limit, with ``|ḟ|``
+#: within ``SETTLED_RATE`` 1/s: a step of ``ḟ`` that small changes the commanded
+#: acceleration by at most ``SETTLED_RATE · v_max``).
+SETTLED = 1e-6
+SETTLED_RATE = 1e-3
+
+#: The plan's own ``(velocity, acceleration, jerk)`` at the plan time ``P`` (s) of node
+#: time ``t`` (ns), or None where nothing scaled moves.
+PlanState = Callable[[int, float], tuple[np.ndarray, np.ndarray, np.ndarray] | None]
+
+
+def check_factor(value: object, name: str = 'speed_scaling') -> float:
+    """Return ``value`` as a float in ``[0, 1]``; ``ValueError`` saying why it is not."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f'{name} must be a number in [0, 1], got {value!r}')
+    if not math.isfinite(value):
+        raise ValueError(f'{name} must be finite (a number in [0, 1]), got {value!r}')
+    if not 0.0 <= value <= 1.0:
+        raise ValueError(f'{name} must be in [0, 1] (0 pauses, 1 is full speed), '
+                         f'got {value!r}')
+    return float(value)
+
+
+class FactorInputs:
+    """The two inputs, their product (the factor asked for) and the messages ignored."""
+
+    def __init__(self, parameter: float = 1.0) -> None:
+        """Start with the parameter ``speed_scaling`` and the topic at 1."""
+        self.parameter = check_factor(parameter)
+        self.topic = 1.0
+        self.ignored = 0  # topic messages outside [0, 1] or not finite
+        self.last_ignored = ''
+
+    @property
+    def product(self) -> float:
+        """Return the factor asked for: parameter × topic."""
+        return self.parameter * self.topic
+
+    def take_message(self, value: float) -> str | None:
+        """Take a topic factor; None if taken, else why it is ignored (counted)."""
+        try:
+            self.topic = check_factor(value, '~/speed_scaling_input factor')
+        except ValueError as error:
+            self.ignored += 1
+            self.last_ignored = str(error)
+            return self.last_ignored
+        return None
+
+    def values(self, in_force: float) -> list[tuple[str, str]]:
+        """Give the ``/diagnostics`` key/values: both inputs, the factor in force, the ignored."""
+        values = [('speed_scaling (parameter)', f'{self.parameter:g}'),
+                  ('speed_scaling_input (topic)', f'{self.topic:g}'),
+                  ('speed scaling in force', f'{in_force:.4g}'),
+                  ('speed_scaling_input ignored', str(self.ignored))]
+        if self.last_ignored:
+            values.append(('last speed_scaling_input ignored', self.last_ignored))
+        return values
+
+
+def jerk_at(plan: Trajectory, time: float) -> np.ndarray:
+    """Return the plan's own jerk (rad/s³) at ``time`` (s, clipped to the plan), ``(joints,)``."""
+    time = min(max(float(time), 0.0), plan.duration)
+    coefficients = plan.coefficients
+    size = coefficients.shape[1]
+    if size < 4:
+        return np.zeros(plan.joint_count)
+    breakpoints = plan.breakpoints
+    joints = np.arange(plan.joint_count)
+    if breakpoints.ndim == 1:
+        piece = np.full(plan.joint_count, np.searchsorted(breakpoints[1:-1], time, side='right'))
+        local = time - breakpoints[piece]
+    else:
+        piece = np.count_nonzero(breakpoints[1:-1] <= time, axis=0)
+        local = time - breakpoints[piece, joints]
+    powers = np.arange(3, size)
+    factors = powers * (powers - 1) * (powers - 2)
+    gathered = coefficients[piece, 3:, joints]  # (joints, size - 3)
+    return np.sum(gathered * factors * local[:, None] ** (powers - 3), axis=1)
+
+
+def own_state(plan: Trajectory, time: float, jerk: bool
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the plan's own ``(v, a, j)`` at ``time`` (s); ``j`` zeros unless ``jerk``."""
+    _, velocity, acceleration = state_at(plan, time)
+    return velocity, acceleration, (jerk_at(plan, time) if jerk
+                                    else np.zeros_like(velocity))
+
+
+def _interval(base: np.ndarray, bound: np.ndarray, velocity: np.ndarray
+              ) -> tuple[float, float]:
+    """Return the ``x`` with ``|base + x v| <= bound`` for every moving joint (∩)."""
+    moving = np.abs(velocity) > RESTING
+    if not moving.any():
+        return -math.inf, math.inf
+    v = velocity[moving]
+    low = (-bound[moving] - base[moving]) / v
+    high = (bound[moving] - base[moving]) / v
+    return float(np.max(np.minimum(low, high))), float(np.min(np.maximum(low, high)))
+
+
+def rate_bounds(f: float, velocity: np.ndarray, acceleration: np.ndarray,
+                max_acceleration: np.ndarray, margin: float = MARGIN) -> tuple[float, float]:
+    """
+    Return the interval of ``ḟ`` (1/s) keeping the commanded acceleration within its bound.
+
+    Per moving joint ``|f² a + ḟ v| <= B`` with ``B = max(σ a_max, f² |a|)`` (never worse
+    than the plan itself), i.e. ``ḟ`` between ``(±B - f² a) / v``; the intersection over
+    the joints. It always holds 0 (``|f² a| <= B``).
+    """
+    base = f * f * acceleration
+    bound = np.maximum(margin * max_acceleration, np.abs(base))
+    low, high = _interval(base, bound, velocity)
+    return min(low, 0.0), max(high, 0.0)
+
+
+def jerk_bounds(f: float, rate: float, velocity: np.ndarray, acceleration: np.ndarray,
+                jerk: np.ndarray, max_jerk: np.ndarray, margin: float = MARGIN
+                ) -> tuple[float, float]:
+    """
+    Return the interval of ``f̈`` (1/s²) keeping the commanded jerk within its bound.
+
+    Per moving joint ``|f³ j + 3 f ḟ a + f̈ v| <= B`` with ``B = max(σ j_max,
+    |f³ j + 3 f ḟ a|)``: ``f̈`` between ``(±B - f³ j - 3 f ḟ a) / v``. It holds 0.
+    """
+    base = f ** 3 * jerk + 3.0 * f * rate * acceleration
+    bound = np.maximum(margin * max_jerk, np.abs(base))
+    low, high = _interval(base, bound, velocity)
+    return min(low, 0.0), max(high, 0.0)
+
+
+@dataclass(frozen=True)
+class Knot:
+    """
+    The ramp at a grid time and on the step after it.
+
+    ``clock`` is ``P`` (s of plan time since the node clock's zero), ``factor`` is ``f``,
+    ``rate`` is ``ḟ`` there (1/s) and ``curvature`` ``f̈`` (1/s²) on the whole step after
+    it: ``f`` is a polynomial of degree <= 2 on each step, ``P`` of degree <= 3.
+    """
+
+    time_ns: int
+    clock: float
+    factor: float
+    rate: float = 0.0
+    curvature: float = 0.0
+
+    def at(self, time_ns: int) -> tuple[float, float, float, float]:
+        """``(P, f, ḟ, f̈)`` at ``time_ns`` within the step after this knot (exact)."""
+        d = (time_ns - self.time_ns) * 1e-9
+        f, r, c = self.factor, self.rate, self.curvature
+        return (self.clock + f * d + r * d * d / 2.0 + c * d ** 3 / 6.0,
+                f + r * d + c * d * d / 2.0, r + c * d, c)
+
+    @property
+    def still(self) -> bool:
+        """Whether ``f`` is constant from here (``ḟ = f̈ = 0``)."""
+        return self.rate == 0.0 and self.curvature == 0.0
+
+
+class TimeMap:
+    """
+    The plan clock ``P(t) = ∫ f dt`` with ``f`` ramped toward the factor asked for.
+
+    Deterministic: ``P`` at a time is the same whoever asks first, as long as the factor
+    asked for and the plans do not change (:attr:`version` counts the changes of the
+    former; :meth:`forget` is told the latter). What is settled (``f = f*``, ``ḟ = 0``)
+    is a straight line, computed at once; a ramp is stepped on ``STEP_NS`` and its knots
+    are kept until a change. Nothing before the committed knot is asked again (the
+    stream commits the time it published). Not thread-safe (the stream's lock guards it).
+    """
+
+    def __init__(self, max_acceleration: np.ndarray, max_jerk: np.ndarray | None = None,
+                 factor: float = 1.0, step_ns: int = STEP_NS,
+                 origin_ns: int | None = None) -> None:
+        """
+        Start with ``f = f* = factor`` and ``P = 0`` at ``origin_ns`` (the node's start).
+
+        So ``P`` stays small and ``P(t) - P(s)`` exact to ~1e-12 s for hours. ``None``:
+        at the first question about a time after ``EARLIEST_NS``. A question about a
+        time before the origin is answered as at the origin.
+        """
+        self.max_acceleration = np.asarray(max_acceleration, dtype=float)
+        self.max_jerk = None if max_jerk is None else np.asarray(max_jerk, dtype=float)
+        self.target = check_factor(factor)
+        self.step_ns = step_ns
+        self.version = 0
+        self._base: Knot | None = None
+        if origin_ns is not None:
+            self._base = Knot(origin_ns - origin_ns % step_ns, 0.0, self.target)
+        self._ahead: list[Knot] = []
+
+    def set_limits(self, max_acceleration: np.ndarray, max_jerk: np.ndarray | None) -> None:
+        """Ramp within new limits from the next step on (``max_jerk`` None: no jerk bound)."""
+        self.max_acceleration = np.asarray(max_acceleration, dtype=float)
+        self.max_jerk = None if max_jerk is None else np.asarray(max_jerk, dtype=float)
+        self.forget()
+
+    def forget(self) -> None:
+        """Drop the knots computed ahead of the committed one (the plans changed)."""
+        self._ahead.clear()
+
+    def set_target(self, factor: float, from_ns: int, plan_state: PlanState) -> None:
+        """Ramp toward ``factor`` (in [0, 1]) from the first grid time at or after ``from_ns``."""
+        factor = check_factor(factor)
+        self.commit(from_ns, plan_state)
+        self._ahead.clear()
+        if factor == self.target:
+            return
+        self.target = factor
+        self.version += 1
+        if self._base.time_ns >= from_ns:  # on the grid: its step is decided again
+            self._base = self._decide(self._base, plan_state)
+
+    @property
+    def settled(self) -> bool:
+        """Whether ``f`` is at the factor asked for, at rest (at the committed knot)."""
+        return self._base is None or self._is_settled(self._base)
+
+    def commit(self, time_ns: int, plan_state: PlanState) -> None:
+        """Fix the ramp up to the last grid time at or before ``time_ns``."""
+        knot = self._knot_before(time_ns, plan_state)
+        self._ahead = [k for k in self._ahead if k.time_ns > knot.time_ns]
+        self._base = knot
+
+    def at(self, time_ns: int, plan_state: PlanState) -> tuple[float, float, float, float]:
+        """``(P (s), f, ḟ (1/s), f̈ (1/s²))`` at node time ``time_ns`` (ns, >= committed)."""
+        knot = self._knot_before(time_ns, plan_state)
+        return knot.at(max(time_ns, knot.time_ns))
+
+    def _is_settled(self, knot: Knot) -> bool:
+        return knot.factor == self.target and knot.still
+
+    def _knot_before(self, time_ns: int, plan_state: PlanState) -> Knot:
+        if self._base is None:
+            if time_ns < EARLIEST_NS:  # "since forever": no origin from that
+                return Knot(time_ns, 0.0, self.target)
+            self._base = Knot(time_ns - time_ns % self.step_ns, 0.0, self.target)
+        time_ns = max(time_ns, self._base.time_ns)
+        grid = max(self._base.time_ns, time_ns - time_ns % self.step_ns)
+        knot = self._base
+        for ahead in self._ahead:
+            if ahead.time_ns > grid:
+                return knot
+            knot = ahead
+        while knot.time_ns < grid:
+            if self._is_settled(knot):  # a straight line to the grid time
+                return Knot(grid, knot.clock + knot.factor * (grid - knot.time_ns) * 1e-9,
+                            knot.factor)
+            clock, factor, rate, _ = knot.at(knot.time_ns + self.step_ns)
+            factor = min(max(factor, 0.0), 1.0)
+            slow = self.max_jerk is None or abs(rate) <= SETTLED_RATE
+            if slow and abs(self.target - factor) <= SETTLED:
+                factor, rate = self.target, 0.0
+            knot = Knot(knot.time_ns + self.step_ns, clock, factor, rate)
+            knot = self._decide(knot, plan_state)
+            self._ahead.append(knot)
+        return knot
+
+    def _decide(self, knot: Knot, plan_state: PlanState) -> Knot:
+        """``knot`` with the slope (``ḟ``, or ``f̈`` under a jerk limit) of its step."""
+        h = self.step_ns * 1e-9
+        error = self.target - knot.factor
+        if error == 0.0 and knot.rate == 0.0:
+            return Knot(knot.time_ns, knot.clock, knot.factor)
+        state = plan_state(knot.time_ns, knot.clock)
+        if self.max_jerk is None or state is None:
+            low, high = (-math.inf, math.inf) if state is None else rate_bounds(
+                knot.factor, state[0], state[1], self.max_acceleration)
+            return Knot(knot.time_ns, knot.clock, knot.factor, min(max(error / h, low), high))
+        return Knot(knot.time_ns, knot.clock, knot.factor, knot.rate,
+                    self._curvature(knot, state, error, h))
+
+    def _curvature(self, knot: Knot, state: tuple[np.ndarray, np.ndarray, np.ndarray],
+                   error: float, h: float) -> float:
+        """
+        ``f̈`` on the step after ``knot`` under a jerk limit: toward the slope that reaches ``f*``.
+
+        The slope asked for is the braking curve ``sign(e) √(2 K |e|)`` (``K`` the ``f̈``
+        available, from the jerk interval), capped to reach ``f*`` in one step and kept
+        inside the acceleration interval; ``f̈`` moves ``ḟ`` toward it within the jerk
+        interval.
+        """
+        velocity, acceleration, jerk = state
+        low, high = rate_bounds(knot.factor, velocity, acceleration, self.max_acceleration)
+        c_low, c_high = jerk_bounds(knot.factor, knot.rate, velocity, acceleration, jerk,
+                                    self.max_jerk)
+        available = min(-c_low, c_high)
+        if not math.isfinite(available) or available <= 0.0:
+            available = 1.0 / (h * h)  # nothing bounds it (no joint moves)
+        wanted = math.copysign(min(math.sqrt(2.0 * available * abs(error)), abs(error) / h),
+                               error)
+        wanted = min(max(wanted, low), high)
+        return min(max((wanted - knot.rate) / h, c_low), c_high)
