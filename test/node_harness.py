@@ -20,6 +20,7 @@ import time
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
+import pytest
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.srv import SetParameters
 import rclpy
@@ -76,6 +77,22 @@ def node_env(extra_pythonpath: bool = True) -> dict:
         env['PYTHONPATH'] = os.pathsep.join(
             [str(REPO)] + [p for p in env.get('PYTHONPATH', '').split(os.pathsep) if p])
     return env
+
+
+def action_types():
+    """
+    Return ``(FollowJointTrajectory, JointTolerance)`` from control_msgs.
+
+    Where control_msgs is not importable the node runs without the action: skip the
+    calling test module, saying so (call it at module level).
+    """
+    try:
+        from control_msgs.action import FollowJointTrajectory
+        from control_msgs.msg import JointTolerance
+    except ImportError as error:
+        pytest.skip(f'control_msgs is not importable ({error}): the node runs without '
+                    '~/follow_joint_trajectory', allow_module_level=True)
+    return FollowJointTrajectory, JointTolerance
 
 
 def end_process(process: subprocess.Popen, sig: int = signal.SIGTERM,

@@ -7,6 +7,11 @@ latest command with a first-order lag (time constant ``--tau`` s) and is publish
 message ``[index, offset]`` on ``--nudge`` moves joint ``index`` by ``offset`` rad and
 holds it there for ``--nudge-hold`` s ("by hand": the commands are ignored meanwhile);
 the first nudge also ends ``--omit`` (a joint left out of the messages until then).
+``--offset`` adds a constant bias to the published positions (a miscalibrated encoder:
+the robot follows the commands, its measured state is off by that much). A message on
+``--freeze`` lists joint indices that stop following from then on (empty: all follow
+again); ``[seconds]`` on ``--pause`` publishes nothing for that long (the robot still
+follows: its driver's state output stalled).
 """
 
 import argparse
@@ -37,6 +42,10 @@ def parse(argv):
     parser.add_argument('--states', default='/robot/joint_states')
     parser.add_argument('--nudge', default='/robot/nudge')
     parser.add_argument('--nudge-hold', type=float, default=1.0, help='s')
+    parser.add_argument('--offset', default='',
+                        help='bias of the published positions, comma separated (rad)')
+    parser.add_argument('--freeze', default='/robot/freeze')
+    parser.add_argument('--pause', default='/robot/pause')
     return parser.parse_args(argv)
 
 
@@ -51,12 +60,18 @@ class StandInRobot(Node):
         self.held_until = [0.0] * len(self.names)
         self.began = time.monotonic()
         self.omitting = bool(args.omit)
+        self.offset = [float(x) for x in args.offset.split(',')] if args.offset \
+            else [0.0] * len(self.names)
+        self.frozen = {self.names.index(args.frozen)} if args.frozen else set()
+        self.silent_until = 0.0
         reliability = (ReliabilityPolicy.RELIABLE if args.reliability == 'reliable'
                        else ReliabilityPolicy.BEST_EFFORT)
         self.publisher = self.create_publisher(
             JointState, args.states, QoSProfile(depth=10, reliability=reliability))
         self.create_subscription(Float64MultiArray, args.commands, self.on_command, 10)
         self.create_subscription(Float64MultiArray, args.nudge, self.on_nudge, 10)
+        self.create_subscription(Float64MultiArray, args.freeze, self.on_freeze, 10)
+        self.create_subscription(Float64MultiArray, args.pause, self.on_pause, 10)
         self.period = 1.0 / args.rate
         self.create_timer(self.period, self.step)
 
@@ -70,17 +85,26 @@ class StandInRobot(Node):
         self.position[index] += offset
         self.held_until[index] = time.monotonic() + self.args.nudge_hold
 
+    def on_freeze(self, message):
+        self.frozen = {int(index) for index in message.data}
+
+    def on_pause(self, message):
+        self.silent_until = time.monotonic() + message.data[0]
+
     def step(self):
         now = time.monotonic()
         if self.args.stop_after and now - self.began > self.args.stop_after:
             return
         gain = 1.0 - math.exp(-self.period / self.args.tau)
         if self.command is not None:
-            for index, name in enumerate(self.names):
-                if name != self.args.frozen and now >= self.held_until[index]:
+            for index in range(len(self.names)):
+                if index not in self.frozen and now >= self.held_until[index]:
                     self.position[index] += (self.command[index] - self.position[index]) * gain
+        if now < self.silent_until:
+            return
         names = [n for n in self.args.extra.split(',') if n] + self.names[::-1]
-        positions = [0.5] * (len(names) - len(self.names)) + self.position[::-1]
+        measured = [p + o for p, o in zip(self.position, self.offset, strict=True)]
+        positions = [0.5] * (len(names) - len(self.names)) + measured[::-1]
         if self.omitting:
             keep = [i for i, n in enumerate(names) if n != self.args.omit]
             names, positions = [names[i] for i in keep], [positions[i] for i in keep]

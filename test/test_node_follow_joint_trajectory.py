@@ -11,6 +11,7 @@ import time
 
 from action_msgs.msg import GoalStatus
 from node_harness import (
+    action_types,
     end_process,
     generator_session,
     JOINTS,
@@ -27,12 +28,7 @@ from rclpy.action import ActionClient
 from traj_gen_ros import cubic_via, quintic_via
 from trajectory_msgs.msg import MultiDOFJointTrajectoryPoint
 
-try:
-    from control_msgs.action import FollowJointTrajectory
-    from control_msgs.msg import JointTolerance
-except ImportError as error:
-    pytest.skip(f'control_msgs is not importable ({error}): the node runs without '
-                '~/follow_joint_trajectory', allow_module_level=True)
+FollowJointTrajectory, JointTolerance = action_types()
 
 RATE = 100.0
 ACTION = '/trajectory_generator/follow_joint_trajectory'

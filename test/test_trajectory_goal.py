@@ -123,7 +123,7 @@ def test_refusals_name_the_joint_point_and_value():
         'point 2 (1 s) is not after point 1 (1 s)': (
             ['a'], [good, ([0.1], [], [], 1.0), ([0.2], [], [], 1.0)]),
         'point 1 has 2 positions but joint_names has 1': (['a'], [good, ([0, 1], [], [], 1.0)]),
-        "has joint 'a' at 0.1 rad, 0.1 rad from where the arm is (0 rad): above "
+        "has joint 'a' at 0.1 rad, 0.1 rad from where the arm is (setpoint 0 rad): above "
         'allowed_start_tolerance 0.01 rad': (['a'], [([0.1], [], [], 0.0), ([0.2], [], [], 1)]),
         "the last point (point 1) has velocity 0.5 for joint 'a'": (
             ['a'], [([0.0], [0.0], [], 0.0), ([0.2], [0.5], [], 1.0)]),

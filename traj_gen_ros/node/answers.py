@@ -40,6 +40,8 @@ class Request:
     values: dict[str, str]
     stamp_ns: int
     request: object
+    #: Why it was refused, once answered so (:meth:`Answers.refused`); '' until then.
+    refusal: str = ''
 
 
 class Answers:
@@ -108,7 +110,8 @@ class Answers:
             'joints': str(joints), 'start_delay': f'{delay:.6f}'})
 
     def refused(self, request: Request, reason: str) -> None:
-        """Answer ERROR: ``<kind> refused: <reason>``."""
+        """Answer ERROR: ``<kind> refused: <reason>`` (kept in ``request.refusal``)."""
+        request.refusal = reason
         self._answer_superseded()
         self.report(DiagnosticStatus.ERROR, f'{request.kind} refused: {reason}', request.values)
 

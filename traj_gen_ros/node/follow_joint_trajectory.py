@@ -16,15 +16,15 @@ checked and planned in :mod:`traj_gen_ros.node.trajectory_goal`, the tolerances 
   ABORTED saying what replaced it (:attr:`RequestHandler.on_accepted`);
 * a cancel brakes to rest within the limits (``plan_stop``), then CANCELED;
 * a monitor timer on the executor (every ``MONITOR_PERIOD`` s while a goal is active)
-  publishes the feedback, checks the tolerances against the measured state (if any) and
-  ends the goal: SUCCEEDED once the stream has published the trajectory's end (and, with
-  a measured state, the arm is within ``goal_tolerance`` and still).
+  publishes the feedback, checks the tolerances against the measured state (if any, and
+  no older than ``STALE_AFTER``) and ends the goal: SUCCEEDED once the stream has
+  published the trajectory's end (and, with a measured state, the arm is within
+  ``goal_tolerance`` and still).
 
-The goal's terminal state and result are set by an execute callback scheduled only when
-the goal ends (:meth:`ActionServer.notify_execute`): an ``async`` execute callback
-awaiting a future would be resumed by Jazzy's executor on every spin, a busy loop beside
-the stream thread. Everything here runs on the executor thread, except
-:meth:`_on_request_accepted`, which only records under a lock what the monitor then ends.
+The terminal state and result are set by an execute callback scheduled only when the goal
+ends (:meth:`ActionServer.notify_execute`): Jazzy's executor resumes an ``async`` one on
+every spin, a busy loop beside the stream thread. All runs on the executor thread but
+:meth:`_on_request_accepted`, which records under a lock what the monitor then ends.
 
 Feedback: ``joint_names`` the goal's, in its order; ``desired`` the setpoint (position,
 velocity, acceleration) at the monitor tick; ``actual`` the measured positions (else the
@@ -61,10 +61,11 @@ from traj_gen_ros.node.trajectory_goal import (
 from traj_gen_ros.node.trajectory_tolerances import (
     ABORTED,
     CANCELED,
-    default_tolerances,
     goal_tolerances,
     outcome,
+    read_defaults,
     SUCCEEDED,
+    TOLERANCE_PARAMETERS,
     Tolerances,
 )
 from trajectory_msgs.msg import JointTrajectoryPoint
@@ -81,8 +82,9 @@ KIND = 'follow_joint_trajectory'
 OWN_KINDS = ('follow_joint_trajectory_cancel', 'follow_joint_trajectory_hold')
 #: The monitor's period (s): feedback rate and how soon a result follows its cause.
 MONITOR_PERIOD = 0.02
-TOLERANCE_PARAMETERS = ('allowed_start_tolerance', 'goal_time_tolerance',
-                        'stopped_velocity_tolerance', 'path_tolerance', 'goal_tolerance')
+#: A measured state older than this (s) is not checked against the tolerances: until
+#: ``joint_topic_timeout`` says it is lost, it would pass for a deviation.
+STALE_AFTER = 0.1
 _REPLACED_BY = {'goal': 'a ~/goal request', 'via_points': 'a ~/via_points request',
                 'stop': 'a ~/stop call', KIND: 'a newer follow_joint_trajectory goal'}
 
@@ -124,7 +126,8 @@ class FollowJointTrajectoryServer:
             without a measured state (then the setpoint stands for it).
         :param measured_velocities: the measured velocities (rad/s), or None.
         :param reseed_to_measured: hold where the arm is after a path-tolerance violation;
-            default: brake to rest within the limits.
+            default: brake to rest within the limits. ``measured_age`` (attribute): s
+            since the measured state arrived.
         """
         self._node = node
         self._handler = handler
@@ -134,6 +137,7 @@ class FollowJointTrajectoryServer:
         self._now_ns = now_ns
         self.measured_positions = measured_positions
         self.measured_velocities = measured_velocities
+        self.measured_age: Callable[[], float] = lambda: 0.0
         self.reseed_to_measured = reseed_to_measured or self._hold
         self._log = node.get_logger()
         self._lock = threading.Lock()
@@ -159,11 +163,8 @@ class FollowJointTrajectoryServer:
 
     def _read_defaults(self, changed: dict[str, object]) -> tuple[float, Tolerances]:
         """``(allowed_start_tolerance, Tolerances)`` from the parameters; ValueError."""
-        values = {name: self._node.get_parameter(name).value for name in TOLERANCE_PARAMETERS}
-        values.update(changed)
-        return values['allowed_start_tolerance'], default_tolerances(
-            len(self._config().joints), values['path_tolerance'], values['goal_tolerance'],
-            values['goal_time_tolerance'], values['stopped_velocity_tolerance'])
+        return read_defaults(lambda name: self._node.get_parameter(name).value,
+                             len(self._config().joints), changed)
 
     def _check_parameters(self, parameters: list) -> SetParametersResult:
         changed = {p.name: p.value for p in parameters if p.name in TOLERANCE_PARAMETERS}
@@ -200,9 +201,9 @@ class FollowJointTrajectoryServer:
             return
         finally:
             self._starting = None
-        if motion is None:  # refused by the planner (answered on ~/status already)
+        if motion is None:  # refused (answered on ~/status already): say why here too
             refusal = active.goal.refusal or GoalError(
-                INVALID_GOAL, 'could not be planned in time for the stream: resend it')
+                INVALID_GOAL, request.refusal or 'refused: resend it')
             self._end(handle, ABORTED, refusal.code, str(refusal))
             return
         self._started(active, motion)
@@ -234,7 +235,8 @@ class FollowJointTrajectoryServer:
             measured = self.measured_positions()
             reference = state.position if measured is None else measured
             return plan_trajectory_goal(config, state, hold_at, goal, reference,
-                                        tolerance if tolerance > 0.0 else np.inf)
+                                        tolerance if tolerance > 0.0 else np.inf,
+                                        measured is not None)
         return plan
 
     def _started(self, active: ActiveGoal, motion: PlannedMotion) -> None:
@@ -321,6 +323,8 @@ class FollowJointTrajectoryServer:
         desired = self._stream.setpoint(max(now_ns, published_ns))  # commanded: scaled
         measured = self.measured_positions()
         self._feedback(active, now_ns, desired, measured)
+        if measured is not None and self.measured_age() > STALE_AFTER:
+            return  # judged on a fresh one, or ended by the timeout (abort_active)
         ended = outcome(active.tolerances, active.goal.request.joints, self._config().joints,
                         (active.start_ns, self._end_ns(active, now_ns, published_ns), now_ns,
                          published_ns),

@@ -183,6 +183,7 @@ class TrajectoryGenerator(Node):
         """Check the action's start and tolerances against the measured state."""
         measured = feedback.measured
         server.measured_positions = lambda: None if measured.lost else measured.position
+        server.measured_age = lambda: time.monotonic() - measured.received_at
         server.reseed_to_measured = lambda: feedback.hold_where_measured(
             'path tolerance violated')
         feedback.on_lost.append(server.abort_active)

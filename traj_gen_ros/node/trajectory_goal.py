@@ -145,13 +145,15 @@ def check_stamp(goal: TrajectoryGoal, now_ns: int) -> None:
 
 
 def start_from_setpoint(goal: TrajectoryGoal, state: State, reference: np.ndarray,
-                        tolerance: float, joints: Sequence[str]) -> ViaRequest:
+                        tolerance: float, joints: Sequence[str],
+                        measured: bool = False) -> ViaRequest:
     """
     Return the goal's points starting at the setpoint ``state`` (see the module doc).
 
     A first point at time 0 farther than ``tolerance`` (rad) from ``reference`` (where the
-    arm is, per joint of the joint set) is refused (INVALID_GOAL); within it, its position
-    becomes the setpoint's so that the motion starts without a jump.
+    arm is, per joint of the joint set: ``measured``, else the setpoint) is refused
+    (INVALID_GOAL); within it, its position becomes the setpoint's so that the motion
+    starts without a jump.
     """
     request = goal.request
     if request.times[0] != 0.0:
@@ -164,7 +166,8 @@ def start_from_setpoint(goal: TrajectoryGoal, state: State, reference: np.ndarra
         raise GoalError(INVALID_GOAL, f'point 0 (time_from_start 0) has joint '
                         f'{joints[joint]!r} at {request.positions[0, worst]:.6g} rad, '
                         f'{offsets[worst]:.6g} rad from where the arm is '
-                        f'({reference[joint]:.6g} rad): above allowed_start_tolerance '
+                        f'({"measured" if measured else "setpoint"} '
+                        f'{reference[joint]:.6g} rad): above allowed_start_tolerance '
                         f'{tolerance:g} rad')
     positions = request.positions.copy()
     positions[0] = state.position[named]
@@ -208,16 +211,17 @@ def slow_down(plan: Trajectory, config: Config) -> tuple[float, str]:
 
 def plan_trajectory_goal(config: Config, state: State, hold_at: np.ndarray,
                          goal: TrajectoryGoal, reference: np.ndarray,
-                         start_tolerance: float) -> PlannedMotion:
+                         start_tolerance: float, measured: bool = False) -> PlannedMotion:
     """
     Plan ``goal`` from the setpoint ``state``; joints it does not name go to ``hold_at``.
 
-    ``reference`` is where the arm is (rad, the measured state, else ``state.position``).
+    ``reference`` is where the arm is (rad): the measured state (``measured``), else
+    ``state.position``.
     Sets ``goal.factor`` and ``goal.slowed``; raises :class:`GoalError` (also stored in
     ``goal.refusal``) when the goal cannot be executed.
     """
     try:
-        return _plan(config, state, hold_at, goal, reference, start_tolerance)
+        return _plan(config, state, hold_at, goal, reference, start_tolerance, measured)
     except GoalError as error:
         goal.refusal = error
         raise
@@ -231,8 +235,9 @@ def plan_trajectory_goal(config: Config, state: State, hold_at: np.ndarray,
 
 
 def _plan(config: Config, state: State, hold_at: np.ndarray, goal: TrajectoryGoal,
-          reference: np.ndarray, start_tolerance: float) -> PlannedMotion:
-    request = start_from_setpoint(goal, state, reference, start_tolerance, config.joints)
+          reference: np.ndarray, start_tolerance: float, measured: bool) -> PlannedMotion:
+    request = start_from_setpoint(goal, state, reference, start_tolerance, config.joints,
+                                  measured)
     if config.limits is not None:
         check_request(config.limits, request, state.position)
     points, times, velocities, accelerations = via_points(config.joints, state, hold_at,

@@ -34,6 +34,9 @@ from traj_gen_ros.node.trajectory_goal import (
 NOT_CHECKED = -1.0
 #: How a goal ends.
 SUCCEEDED, ABORTED, CANCELED = 'succeeded', 'aborted', 'canceled'
+#: The parameters that give the node's defaults (:func:`read_defaults`).
+TOLERANCE_PARAMETERS = ('allowed_start_tolerance', 'goal_time_tolerance',
+                        'stopped_velocity_tolerance', 'path_tolerance', 'goal_tolerance')
 
 
 @dataclass(frozen=True)
@@ -56,6 +59,20 @@ def default_tolerances(joint_count: int, path: object, goal: object, goal_time: 
     return Tolerances(per_joint('path_tolerance', path, joint_count, 'non-negative'),
                       per_joint('goal_tolerance', goal, joint_count, 'non-negative'),
                       float(goal_time), float(stopped_velocity))
+
+
+def read_defaults(value: Callable[[str], object], joint_count: int,
+                  changed: dict[str, object]) -> tuple[float, Tolerances]:
+    """
+    Return ``(allowed_start_tolerance, Tolerances)`` from the parameters; ``ValueError``.
+
+    ``value(name)`` gives a parameter's value; ``changed`` (name: value) the ones being set.
+    """
+    values = {name: changed[name] if name in changed else value(name)
+              for name in TOLERANCE_PARAMETERS}
+    return values['allowed_start_tolerance'], default_tolerances(
+        joint_count, values['path_tolerance'], values['goal_tolerance'],
+        values['goal_time_tolerance'], values['stopped_velocity_tolerance'])
 
 
 def _override(values: np.ndarray, joints: Sequence[str],
