@@ -112,7 +112,7 @@ def plan_goal(config: Config, state: State, hold_at: np.ndarray,
                         a0=acceleration, max_jerk=config.max_jerk)
     except ValueError as error:  # JointError too: named by the joint's ROS name
         reason = error.named(config.joints) if isinstance(error, JointError) else str(error)
-        moving = '' if not np.any(velocity) else (
+        moving = '' if not (np.any(velocity) or np.any(acceleration)) else (
             f' from the current motion (velocity {np.round(velocity, 4).tolist()} rad/s, '
             f'acceleration {np.round(acceleration, 4).tolist()} rad/s^2); resend it when '
             'the motion has slowed, or call ~/stop first')
