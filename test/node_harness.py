@@ -384,3 +384,9 @@ def busy_processes(count: int | None = None):
             process.kill()
         for process in processes:
             process.wait()
+
+
+def stamp_gaps(probe: 'Probe', start_ns: int, end_ns: int | None = None) -> np.ndarray:
+    """Periods (s) between consecutive ``joint_states`` stamps in a window."""
+    times, _, _ = probe.states_between(start_ns, end_ns)
+    return np.diff(times)

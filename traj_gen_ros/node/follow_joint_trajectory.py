@@ -35,7 +35,6 @@ most once per stream period.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 import threading
 
 import numpy as np
@@ -46,7 +45,9 @@ from rclpy.node import Node
 from traj_gen_ros.node.answers import Answers, Request
 from traj_gen_ros.node.config import Config
 from traj_gen_ros.node.motion import PlannedMotion, State
+from traj_gen_ros.node.parsing import seconds
 from traj_gen_ros.node.request_handler import brake_planner, RequestHandler
+from traj_gen_ros.node.running_goal import ActiveGoal
 from traj_gen_ros.node.stream import Stream
 from traj_gen_ros.node.trajectory_goal import (
     check_stamp,
@@ -87,28 +88,6 @@ MONITOR_PERIOD = 0.02
 STALE_AFTER = 0.1
 _REPLACED_BY = {'goal': 'a ~/goal request', 'via_points': 'a ~/via_points request',
                 'stop': 'a ~/stop call', KIND: 'a newer follow_joint_trajectory goal'}
-
-
-def _seconds(duration: object) -> float:
-    return duration.sec + duration.nanosec * 1e-9
-
-
-@dataclass
-class ActiveGoal:
-    """A goal being executed: its handle, request, tolerances and times (ns, node clock)."""
-
-    handle: ServerGoalHandle
-    goal: TrajectoryGoal
-    request: Request
-    tolerances: Tolerances
-    start_ns: int = 0
-    end_ns: int = 0
-    target: np.ndarray | None = None
-    cancel: Request | None = None
-    brake_start_ns: int | None = None
-    replaced: str = ''
-    feedback_ns: int = -(2 ** 62)
-    at_rest_ns: int | None = None  # the first setpoint published at the end, at rest
 
 
 class FollowJointTrajectoryServer:
@@ -212,7 +191,7 @@ class FollowJointTrajectoryServer:
         message = handle.request
         trajectory = message.trajectory
         stamp = trajectory.header.stamp
-        points = [(p.positions, p.velocities, p.accelerations, _seconds(p.time_from_start))
+        points = [(p.positions, p.velocities, p.accelerations, seconds(p.time_from_start))
                   for p in trajectory.points]
         joints = self._config().joints
         goal = parse_trajectory_goal(joints, trajectory.joint_names, points,
@@ -222,7 +201,7 @@ class FollowJointTrajectoryServer:
             self._defaults[1], joints,
             [(t.name, t.position) for t in message.path_tolerance],
             [(t.name, t.position) for t in message.goal_tolerance],
-            _seconds(message.goal_time_tolerance))
+            seconds(message.goal_time_tolerance))
         check_stamp(goal, self._now_ns())
         request.request, request.stamp_ns = goal, goal.stamp_ns
         return ActiveGoal(handle, goal, request, tolerances)
@@ -325,9 +304,9 @@ class FollowJointTrajectoryServer:
         self._feedback(active, now_ns, desired, measured)
         if measured is not None and self.measured_age() > STALE_AFTER:
             return  # judged on a fresh one, or ended by the timeout (abort_active)
+        end_ns = active.end(now_ns, published_ns, self._stream.moving_at(published_ns))
         ended = outcome(active.tolerances, active.goal.request.joints, self._config().joints,
-                        (active.start_ns, self._end_ns(active, now_ns, published_ns), now_ns,
-                         published_ns),
+                        (active.start_ns, end_ns, now_ns, published_ns),
                         desired.position, active.target, measured,
                         self.measured_velocities, active.goal.slowed)
         if ended is not None:
@@ -335,20 +314,10 @@ class FollowJointTrajectoryServer:
             if ended[1] == PATH_TOLERANCE_VIOLATED:
                 self.reseed_to_measured()
 
-    def _end_ns(self, active: ActiveGoal, now_ns: int, published_ns: int) -> int:
-        """
-        Return when the goal's motion ends (ns): its planned end, later if it was slowed.
-
-        With speed scaling (``speed_scaling``) the plan runs on its own clock: the end is
-        the first setpoint the stream publishes at rest after the goal started, and the
-        goal-time check counts from there (a slowed goal is not failed for being slow).
-        At a factor of 1 that is the planned end's tick.
-        """
-        if active.at_rest_ns is None:
-            if published_ns < active.start_ns or self._stream.moving_at(published_ns):
-                return max(active.end_ns, now_ns + 1)
-            active.at_rest_ns = published_ns
-        return max(active.end_ns, active.at_rest_ns)
+    def destroy(self) -> None:
+        """Destroy the action server (before the node: rclpy does not do it for waitables)."""
+        self._timer.cancel()
+        self._server.destroy()
 
     def abort_active(self, reason: str) -> None:
         """End the running goal ABORTED with ``reason``: the measured state was lost."""

@@ -277,9 +277,11 @@ class TrajectoryGenerator(Node):
             self.speed_scaling.apply(parameters)
 
     def destroy_node(self) -> None:
-        """Stop the request and stream threads, then destroy the node."""
+        """Stop the request and stream threads, destroy the action server, then the node."""
         self._request_thread.stop()
         self._stream.stop()
+        if self.follow_joint_trajectory is not None:
+            self.follow_joint_trajectory.destroy()
         super().destroy_node()
 
 

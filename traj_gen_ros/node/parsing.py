@@ -154,6 +154,11 @@ def parse_via(joints: Sequence[str], names: Sequence[str],
                       np.asarray(accelerations) if accelerations else None, auto)
 
 
+def seconds(duration: object) -> float:
+    """Return a ``builtin_interfaces/Duration`` (``sec``, ``nanosec``) in seconds."""
+    return duration.sec + duration.nanosec * 1e-9
+
+
 def too_many_points(count: int) -> str:
     """Give the refusal of a request with ``count`` > :data:`MAX_VIA_POINTS` points."""
     return (f'via_points has {count} points, above the limit of {MAX_VIA_POINTS}: split the '

@@ -43,7 +43,6 @@ import statistics
 import threading
 import time
 
-from builtin_interfaces.msg import Duration
 import numpy as np
 from rclpy.serialization import deserialize_message
 from rclpy.subscription import Subscription
@@ -58,6 +57,7 @@ from traj_gen_ros.node.parsing import (
     parse_goal,
     parse_via,
     RequestError,
+    seconds,
     too_many_points,
 )
 from traj_gen_ros.node.planning import plan_request, plan_stop
@@ -100,10 +100,6 @@ SAMPLE_AFTER_FIRST_NS = 1_500_000
 #: not name rest, the parsed request)``; :func:`~traj_gen_ros.node.planning.plan_request`
 #: for goals and via points, :func:`brake_planner` for ``~/stop``.
 Planner = Callable[[Config, State, np.ndarray, object], PlannedMotion]
-
-
-def _seconds(duration: Duration) -> float:
-    return duration.sec + duration.nanosec * 1e-9
 
 
 class RequestHandler:
@@ -399,7 +395,7 @@ def via_request(data: bytes, received: int, joints: Sequence[str],
     stamp = message.header.stamp
     stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # 0 or past: "now"
     request = Request('via_points', values, stamp_ns, None)
-    points = [(p.positions, p.velocities, p.accelerations, _seconds(p.time_from_start))
+    points = [(p.positions, p.velocities, p.accelerations, seconds(p.time_from_start))
               for p in message.points]
     try:
         request.request = parse_via(joints, message.joint_names, points)

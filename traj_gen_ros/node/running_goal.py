@@ -1,0 +1,49 @@
+"""
+A ``~/follow_joint_trajectory`` goal while it runs, and its end on the stream's clock.
+
+Times are ns of the node clock; positions rad (or m), velocities rad/s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from rclpy.action.server import ServerGoalHandle
+from traj_gen_ros.node.answers import Request
+from traj_gen_ros.node.trajectory_goal import TrajectoryGoal
+from traj_gen_ros.node.trajectory_tolerances import Tolerances
+
+
+@dataclass
+class ActiveGoal:
+    """A goal being executed: its handle, request, tolerances and times (ns, node clock)."""
+
+    handle: ServerGoalHandle
+    goal: TrajectoryGoal
+    request: Request
+    tolerances: Tolerances
+    start_ns: int = 0
+    end_ns: int = 0
+    target: np.ndarray | None = None
+    cancel: Request | None = None
+    brake_start_ns: int | None = None
+    replaced: str = ''
+    feedback_ns: int = -(2 ** 62)
+    at_rest_ns: int | None = None  # the first setpoint published at the end, at rest
+
+    def end(self, now_ns: int, published_ns: int, moving: bool) -> int:
+        """
+        Return when the goal's motion ends (ns): its planned end, later if it was slowed.
+
+        With speed scaling (``speed_scaling``) the plan runs on its own clock: the end is
+        the first setpoint the stream publishes at rest (``moving`` false at
+        ``published_ns``) after the goal started, and the goal-time check counts from
+        there (a slowed goal is not failed for being slow). At a factor of 1 that is the
+        planned end's tick.
+        """
+        if self.at_rest_ns is None:
+            if published_ns < self.start_ns or moving:
+                return max(self.end_ns, now_ns + 1)
+            self.at_rest_ns = published_ns
+        return max(self.end_ns, self.at_rest_ns)
