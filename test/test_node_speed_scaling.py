@@ -10,13 +10,19 @@ commanded accelerations whatever the jitter of the stamps.
 """
 
 import math
+import subprocess
+import sys
 
+from action_msgs.msg import GoalStatus
+from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import SpeedScalingFactor
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from node_harness import Probe, running_node, stamp_ns
+from node_harness import end_process, node_env, Probe, running_node, stamp_ns, via_message
 import numpy as np
 import pytest
+from rclpy.action import ActionClient
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.time import Time
 
 A_MAX = 2.0
 RATE = 1.9  # σ a_max / v (1/s)
@@ -212,3 +218,122 @@ def test_the_parameter_and_the_topic_multiply(probe):
     values = probe.speed_values(lambda values: values['speed scaling in force'] == '0.25')
     assert values['speed_scaling_input (topic)'] == '0.5'
     probe.factor(1.0)
+
+
+#: A separate process: publishes a factor (reliable, transient local), says so, spins on.
+LATCHED_PUBLISHER = """
+import sys
+import rclpy
+from control_msgs.msg import SpeedScalingFactor
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+rclpy.init()
+node = rclpy.create_node('latched_factor')
+publisher = node.create_publisher(
+    SpeedScalingFactor, '/trajectory_generator/speed_scaling_input',
+    QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+               durability=DurabilityPolicy.TRANSIENT_LOCAL))
+publisher.publish(SpeedScalingFactor(factor=float(sys.argv[1])))
+print('published', flush=True)
+try:
+    rclpy.spin(node)
+except KeyboardInterrupt:
+    pass
+"""
+
+
+def motion_time(probe, target=GOAL):
+    """Send joint_1 to ``target``; return the time (s) from its first moving sample to rest."""
+    first = len(probe.states)
+    status, _ = probe.goal({'joint_1': target})
+    assert status.level == DiagnosticStatus.OK, status.message
+    probe.wait_at_rest(20.0)
+    times, positions, velocities = probe.samples(first)
+    assert positions[-1] == pytest.approx(target, abs=1e-9)
+    moving = np.flatnonzero(velocities != 0.0)
+    return times[moving[-1] + 1] - times[moving[0] - 1]
+
+
+def test_a_latched_factor_published_before_the_node_starts_is_taken():
+    publisher = subprocess.Popen([sys.executable, '-c', LATCHED_PUBLISHER, '0.5'],
+                                 stdout=subprocess.PIPE, text=True, env=node_env())
+    try:
+        assert publisher.stdout.readline().strip() == 'published'
+        with running_node(*ARGS):
+            probe = SpeedProbe()
+            try:
+                probe.wait_ready()
+                values = probe.speed_values(
+                    lambda values: values['speed scaling in force'] == '0.5', 20.0)
+                assert values['speed_scaling_input (topic)'] == '0.5'
+                # LSPB 0 -> 2 rad: 2.5 s planned, 5 s at 0.5 (the ramp was at rest).
+                assert motion_time(probe) == pytest.approx(5.0, abs=0.03)
+                # A volatile best-effort publisher is taken too.
+                volatile = probe.create_publisher(
+                    SpeedScalingFactor, '/trajectory_generator/speed_scaling_input',
+                    QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
+                               durability=DurabilityPolicy.VOLATILE))
+
+                def taken():  # best effort: sent again until /diagnostics shows it
+                    probe.diagnostics.clear()
+                    volatile.publish(SpeedScalingFactor(factor=1.0))
+                    return probe.speed_values(lambda values: True, 10.0)[
+                        'speed scaling in force'] == '1'
+                probe.spin_until(taken, 60.0, 'the best-effort factor')
+                assert motion_time(probe, 0.0) == pytest.approx(2.5, abs=0.03)
+            finally:
+                probe.destroy_node()
+    finally:
+        end_process(publisher, timeout=20.0)
+
+
+def later_stamp(probe, seconds):
+    """Return the node clock (the last sample's stamp) plus ``seconds``, as a stamp."""
+    return Time(nanoseconds=stamp_ns(probe.latest().header.stamp) +
+                int(seconds * 1e9)).to_msg()
+
+
+def test_a_delayed_via_request_a_factor_change_would_make_jump_is_answered_dropped(probe):
+    probe.start_goal()
+    probe.wait_velocity(lambda v: v >= 1.0 - 1e-9, 'the cruise')
+    # Starts 1.5 s from now: the goal still moves there, so slowing it moves that state.
+    status, _ = probe.request(via_message(['joint_1'], [([0.5], 3.0)],
+                                          later_stamp(probe, 1.5)))
+    assert status.level == DiagnosticStatus.OK, status.message
+    request_id = {kv.key: kv.value for kv in status.values}['request_id']
+    count = len(probe.statuses)
+    probe.factor(0.5)
+    probe.spin_until(lambda: len(probe.statuses) > count, 10.0, 'the dropped answer')
+    dropped = probe.statuses[count]
+    assert dropped.level == DiagnosticStatus.ERROR
+    assert {kv.key: kv.value for kv in dropped.values}['request_id'] == request_id
+    assert 'via_points dropped' in dropped.message and 'resend' in dropped.message
+    assert probe.wait_at_rest(20.0)[0] == pytest.approx(GOAL, abs=1e-9)  # the goal's end
+
+
+def test_a_delayed_action_goal_a_factor_change_would_make_jump_is_aborted(probe):
+    client = ActionClient(probe, FollowJointTrajectory,
+                          '/trajectory_generator/follow_joint_trajectory')
+    try:
+        probe.spin_until(client.server_is_ready, 20.0, 'the action server')
+        probe.start_goal()
+        probe.wait_velocity(lambda v: v >= 1.0 - 1e-9, 'the cruise')
+        goal = FollowJointTrajectory.Goal(trajectory=via_message(
+            ['joint_1'], [([3.0], 3.0)], later_stamp(probe, 1.5)))
+        count = len(probe.statuses)
+        future = client.send_goal_async(goal)
+        probe.spin_until(future.done, 10.0, 'the goal response')
+        handle = future.result()
+        assert handle.accepted
+        result = handle.get_result_async()
+        probe.spin_until(lambda: result.done() or len(probe.statuses) > count, 10.0,
+                         'the goal accepted')
+        assert not result.done(), result.result().result.error_string
+        assert probe.statuses[count].level == DiagnosticStatus.OK, probe.statuses[count].message
+        probe.factor(0.5)
+        probe.spin_until(result.done, 20.0, 'the result')
+        assert result.result().status == GoalStatus.STATUS_ABORTED
+        assert 'speed scaling factor changed' in result.result().result.error_string
+        assert any(s.level == DiagnosticStatus.ERROR and
+                   'follow_joint_trajectory dropped' in s.message for s in probe.statuses)
+    finally:
+        client.destroy()

@@ -153,3 +153,24 @@ def test_a_brake_is_never_slowed():
     assert schedule.setpoint(start + 25 * MS).velocity[0] == pytest.approx(0.05)
     # A goal asked while it brakes at a factor below 1 starts where it is at rest.
     assert schedule.scaled_start(start + 10 * MS) == start + 50 * MS
+
+
+def test_a_delayed_motion_a_change_would_make_jump_is_dropped_with_its_tag():
+    schedule = Schedule(held(np.zeros(1)), TimeMap(np.array([2.0])))
+    schedule.splice(T0, goal_motion(), T0)  # cruising at 1 rad/s from 0.5 s to 1 s
+    later = goal_motion()  # planned as if it started from the goal's state at 2 s: rest
+    schedule.splice(T0 + 800 * MS, later, T0, tag='request 7')
+    dropped = schedule.set_factor(0.5, T0 + 600 * MS, 0)  # moves the state at 0.8 s
+    assert dropped == [(later, 'request 7')]
+    assert schedule.pending == 1
+
+
+def test_the_time_left_is_plan_time_still_while_paused():
+    schedule = Schedule(held(np.zeros(1)), TimeMap(np.array([2.0])))
+    schedule.splice(T0, goal_motion(), T0)  # 1.5 s
+    assert schedule.time_left(T0 + 600 * MS) == pytest.approx(0.9)
+    schedule.commit(T0 + 600 * MS)
+    schedule.set_factor(0.0, T0 + 600 * MS, 0)  # at rest 1 / 1.9 s later (plan time 0.263)
+    paused = schedule.time_left(T0 + 2000 * MS)
+    assert paused == pytest.approx(0.9 - 1.0 / (2.0 * 1.9), abs=1e-5)
+    assert schedule.time_left(T0 + 5000 * MS) == paused  # unscaled it would be 0

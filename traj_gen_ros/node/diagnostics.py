@@ -92,13 +92,20 @@ class MotionLog:
         kept = [motion for motion in self._motions if motion[0] < start_ns]
         self._motions = kept[-1:] + [(start_ns, profile, duration)]
 
-    def describe(self, now_ns: int) -> str:
-        """Say what runs at ``now_ns``: ``quintic, 1.234 s left`` or ``holding``."""
+    def describe(self, now_ns: int, time_left: Callable[[int], float] | None = None) -> str:
+        """
+        Say what runs at ``now_ns``: ``quintic, 1.234 s left`` or ``holding``.
+
+        ``time_left(now_ns)``: the plan time left (s) on the plan clock (speed scaling:
+        :meth:`~traj_gen_ros.node.stream.Stream.time_left`); None: duration − time since
+        its start.
+        """
         started = [motion for motion in self._motions if motion[0] <= now_ns]
         text = 'holding'
         if started:
             start_ns, profile, duration = started[-1]
-            left = duration - (now_ns - start_ns) * 1e-9
+            left = (duration - (now_ns - start_ns) * 1e-9 if time_left is None
+                    else time_left(now_ns))
             if left > 0.0:
                 text = f'{profile}, {left:.3f} s left'
         waiting = [motion for motion in self._motions if motion[0] > now_ns]

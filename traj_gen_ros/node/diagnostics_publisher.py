@@ -64,14 +64,17 @@ class NodeDiagnostics:
     def __init__(self, node: Node, config: Callable[[], Config], limits: NodeLimits,
                  answers: CountingAnswers, meter: RateMeter,
                  setpoint: Callable[[], Sequence[float]],
-                 measured: Callable[[], tuple[int, str, list[tuple[str, str]]]] | None = None
-                 ) -> None:
+                 measured: Callable[[], tuple[int, str, list[tuple[str, str]]]] | None = None,
+                 time_left: Callable[[int], float] | None = None) -> None:
         """
         Publish the node's status every :data:`PERIOD` s from the node's parts.
 
         :param setpoint: returns the position last published (rad or m).
         :param measured: gives the measured state's status (``joint_topic`` set), else None.
+        :param time_left: the plan time (s) the motion in effect at a node time (ns) has
+            left, on the plan clock (speed scaling); None: unscaled.
         """
+        self._time_left = time_left
         self._node = node
         self._setpoint = setpoint
         self._outside = ''
@@ -124,7 +127,7 @@ class NodeDiagnostics:
         level, message, values = node_status(
             rate=self._meter.rate(now.nanoseconds * 1e-9), rate_hz=config.rate_hz,
             joints=len(config.joints), profile=config.profile,
-            motion=self._answers.motions.describe(now.nanoseconds),
+            motion=self._answers.motions.describe(now.nanoseconds, self._time_left),
             limits=self._limits_summary(config), urdf_source=self._limits.source,
             urdf_problem=self._limits.problem, counts=self._answers.counts,
             outside=self.check_ranges(),

@@ -132,6 +132,7 @@ class FollowJointTrajectoryServer:
             previous(request, start_ns)
             self._on_request_accepted(request, start_ns)
         handler.on_accepted = on_accepted
+        handler.on_dropped = self._on_request_dropped
         self._timer = node.create_timer(MONITOR_PERIOD, self._monitor)
         self._timer.cancel()
         self._server = ActionServer(
@@ -245,6 +246,15 @@ class FollowJointTrajectoryServer:
                                    f'(request_id {request.values.get("request_id", "?")}); '
                                    'the motion continues from the setpoint')
                 self._replaced.append(active)
+
+    def _on_request_dropped(self, request: Request, reason: str) -> None:
+        """Abort the active goal if its request was dropped before its start."""
+        with self._lock:
+            active = self._active
+            if active is not None and request is active.request:
+                active.replaced = f'dropped: {reason}'
+                self._replaced.append(active)
+                self._active = None
 
     # ------------------------------------------------------------------ cancel
 

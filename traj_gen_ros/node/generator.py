@@ -162,13 +162,13 @@ class TrajectoryGenerator(Node):
             self._now_ns)
         if self.follow_joint_trajectory is not None and self.feedback is not None:
             self._wire_measured_state(self.follow_joint_trajectory, self.feedback)
-        self.speed_scaling = SpeedScalingInput(self, self._stream)
+        self.speed_scaling = SpeedScalingInput(self, self._stream, self._requests.dropped)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._diagnostics = NodeDiagnostics(
             self, lambda: self._config, self._limits, self._answers, self._rate_meter,
             lambda: self._stream.setpoint(self._stream.last_published()).position,
-            self._status_with_speed(measured))
+            self._status_with_speed(measured), self._stream.time_left)
         self._diagnostics.check_ranges()  # a start outside the limits is said at once
         self._answers.trajectory(0, held(initial), self._config.rate_hz)  # warm up
         priority = self._stream.start()

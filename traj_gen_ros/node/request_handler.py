@@ -43,6 +43,7 @@ import statistics
 import threading
 import time
 
+from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
 from rclpy.serialization import deserialize_message
 from rclpy.subscription import Subscription
@@ -137,6 +138,9 @@ class RequestHandler:
         #: Called with each request spliced in and its start (ns), before it is answered:
         #: ``~/follow_joint_trajectory`` ends the goal a newer request replaced.
         self.on_accepted: Callable[[Request, int], None] = lambda request, start_ns: None
+        #: Called with each accepted request dropped before its start and why, after it
+        #: is answered: ``~/follow_joint_trajectory`` aborts its goal.
+        self.on_dropped: Callable[[Request, str], None] = lambda request, reason: None
 
     # ------------------------------------------------------------------ take and parse
 
@@ -267,7 +271,7 @@ class RequestHandler:
                 self._answers.refused(request, f'internal error: {error}')
                 return None
             elapsed_ns = self._elapsed_ns() - began
-            first_ns = self._stream.splice(start_ns, motion)
+            first_ns = self._stream.splice(start_ns, motion, request)
             planning_ns += elapsed_ns
             if first_ns is not None:
                 recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
@@ -290,6 +294,20 @@ class RequestHandler:
                               f'while it was planned (the last attempt took '
                               f'{elapsed_ns * 1e-9:.3f} s); resend it')
         return None
+
+    def dropped(self, requests: Sequence[object], reason: str) -> None:
+        """
+        Answer accepted requests the stream dropped before their start: ERROR, ``reason``.
+
+        Under the request lock, so the answer follows the request's own OK. Tags that are
+        not a :class:`Request` (holds, brakes) are skipped.
+        """
+        with self._lock:
+            for request in requests:
+                if isinstance(request, Request):
+                    self._answers.report(DiagnosticStatus.ERROR,
+                                         f'{request.kind} dropped: {reason}', request.values)
+                    self.on_dropped(request, reason)
 
     def _brake(self, config: Config) -> None:
         """Brake from the next tick (after a failure, or when the measured state is lost)."""

@@ -35,13 +35,18 @@ BEGINNING_NS = -(2 ** 62)
 
 
 class Segment:
-    """A motion from ``start`` (ns) on; ``clock``: the plan clock there (s), scaled only."""
+    """
+    A motion from ``start`` (ns) on; ``clock``: the plan clock there (s), scaled only.
 
-    __slots__ = ('start', 'motion', 'clock')
+    ``tag``: what the caller said it is for (the request), handed back if it is dropped.
+    """
 
-    def __init__(self, start: int, motion: PlannedMotion, clock: float | None) -> None:
+    __slots__ = ('start', 'motion', 'clock', 'tag')
+
+    def __init__(self, start: int, motion: PlannedMotion, clock: float | None,
+                 tag: object = None) -> None:
         """Run ``motion`` from ``start`` (ns); ``clock`` None runs it on the node clock."""
-        self.start, self.motion, self.clock = start, motion, clock
+        self.start, self.motion, self.clock, self.tag = start, motion, clock, tag
 
 
 class Schedule:
@@ -135,7 +140,18 @@ class Schedule:
         kept = [segment for segment in self._segments if segment.start < before_ns]
         return (kept or self._segments)[-1].motion.end.copy()
 
-    def splice(self, start_ns: int, motion: PlannedMotion, now_ns: int) -> None:
+    def time_left(self, time_ns: int) -> float:
+        """
+        Return the plan time (s) the motion in effect at ``time_ns`` has left, 0 at rest.
+
+        ``duration - τ``, ``τ = P(t) - P(start)`` on the plan clock for a scaled motion
+        (it stays put while paused, falls at ``f`` s per s), on the node clock for a brake.
+        """
+        segment = self._segment(time_ns)
+        return max(segment.motion.plan.duration - self._elapsed(segment, time_ns)[0], 0.0)
+
+    def splice(self, start_ns: int, motion: PlannedMotion, now_ns: int,
+               tag: object = None) -> None:
         """Run ``motion`` from ``start_ns``, dropping what would start at or after it."""
         kept = [segment for segment in self._segments if segment.start < start_ns]
         current = [index for index, segment in enumerate(kept) if segment.start <= now_ns]
@@ -144,7 +160,7 @@ class Schedule:
         clock = None
         if not motion.unscaled:
             clock = self.time_map.at(start_ns, self._own_state)[0]
-        self._segments = kept + [Segment(start_ns, motion, clock)]
+        self._segments = kept + [Segment(start_ns, motion, clock, tag)]
         self.time_map.forget()  # the plans after start_ns changed
 
     def commit(self, time_ns: int) -> None:
@@ -161,9 +177,12 @@ class Schedule:
         return time_map.at(time_ns, self._own_state)[0] - \
             time_map.at(start_ns, self._own_state)[0]
 
-    def set_factor(self, factor: float, from_ns: int, defer_ns: int) -> list[PlannedMotion]:
+    def set_factor(self, factor: float, from_ns: int, defer_ns: int
+                   ) -> list[tuple[PlannedMotion, object]]:
         """
         Ramp toward ``factor`` from ``from_ns``; return the delayed motions dropped.
+
+        Each as ``(motion, tag)``, ``tag`` as :meth:`splice` was given it.
 
         The change waits for motions spliced to start within ``defer_ns`` after
         ``from_ns`` (planned from the state the old ramp gave there). A motion delayed
@@ -183,8 +202,9 @@ class Schedule:
             planned = state_at(segment.motion.plan, 0.0)
             if not (np.allclose(start.position, planned[0], rtol=0.0, atol=1e-9)
                     and np.allclose(start.velocity, planned[1], rtol=0.0, atol=1e-9)):
-                return [dropped.motion for dropped in later[index:]]  # planned after it
-            self.splice(segment.start, segment.motion, from_ns)
+                return [(dropped.motion, dropped.tag)  # the rest were planned after it
+                        for dropped in later[index:]]
+            self.splice(segment.start, segment.motion, from_ns, segment.tag)
         return []
 
     @property

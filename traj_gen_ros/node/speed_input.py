@@ -15,6 +15,9 @@ this module reads the inputs and hands their product to the stream
   effort and volatile (it matches every publisher); a message that both deliver is taken
   once (a message no newer by its source timestamp than the last taken is skipped). A
   factor outside [0, 1] or not finite is ignored, logged and counted on ``/diagnostics``;
+* a delayed motion (a future ``header.stamp``) that a change drops is answered: its
+  request gets an ERROR ``~/status`` saying why (:data:`DROPPED`), an action goal is
+  aborted with it (:meth:`RequestHandler.dropped`);
 * ``speed_scaling_output_topic`` (read only, '' = none): the effective factor, as it
   ramps, forwarded as ``SpeedScalingFactor`` (reliable, transient local) to a
   ``joint_trajectory_controller``'s ``speed_scaling_input`` when the commands out are
@@ -42,6 +45,10 @@ INPUT_TOPIC = '~/speed_scaling_input'
 _CDR_LE = b'\x00\x01\x00\x00'
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: Why a delayed motion is dropped (its request's ERROR status, its action goal's abort).
+DROPPED = ('the speed scaling factor changed before its delayed start (header.stamp) '
+           'and moved the state it was planned from: not executed (it would jump); '
+           'resend it')
 ANY = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT,
                  durability=DurabilityPolicy.VOLATILE)
 
@@ -54,10 +61,17 @@ def factor_cdr(factor: float) -> bytes:
 class SpeedScalingInput:
     """The two inputs of the factor, its output, and what ``/diagnostics`` shows of them."""
 
-    def __init__(self, node: Node, stream: Stream) -> None:
-        """Read ``speed_scaling``; subscribe to the topic where control_msgs is importable."""
+    def __init__(self, node: Node, stream: Stream,
+                 on_dropped: Callable[[list[object], str], None] | None = None) -> None:
+        """
+        Read ``speed_scaling``; subscribe to the topic where control_msgs is importable.
+
+        ``on_dropped(tags, reason)`` answers the delayed motions a change drops (the
+        ``tag`` each was spliced with: its request); else they are only logged.
+        """
         self._node = node
         self._stream = stream
+        self._on_dropped = on_dropped
         self.inputs = FactorInputs(node.get_parameter('speed_scaling').value)
         self.available = SpeedScalingFactor is not None
         self._last_source_ns = -1
@@ -115,6 +129,8 @@ class SpeedScalingInput:
             self._node.get_logger().warning(
                 f'speed scaling changed before {len(dropped)} delayed motion(s) started '
                 'from a state the change moved: dropped (they would jump); resend them')
+            if self._on_dropped is not None:
+                self._on_dropped([tag for _, tag in dropped], DROPPED)
 
     def values(self) -> list[tuple[str, str]]:
         """Give the ``/diagnostics`` key/values: both inputs, the factor in force."""

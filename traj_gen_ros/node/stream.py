@@ -156,7 +156,7 @@ class Stream:
         with self._lock:
             return self._schedule.setpoint(time_ns)
 
-    def set_factor(self, factor: float) -> list[PlannedMotion]:
+    def set_factor(self, factor: float) -> list[tuple[PlannedMotion, object]]:
         """
         Ramp the speed scaling toward ``factor`` (in [0, 1]) from the last setpoint on.
 
@@ -164,7 +164,7 @@ class Stream:
         already shows it.
 
         Returns the delayed motions dropped because the change moved the state they were
-        planned from (:meth:`Schedule.set_factor`).
+        planned from, with the ``tag`` each was spliced with (:meth:`Schedule.set_factor`).
         """
         with self._lock:
             from_ns = self._last_published_ns + 1
@@ -193,6 +193,11 @@ class Stream:
         with self._lock:
             return self._schedule.plan_elapsed(start_ns, now_ns)
 
+    def time_left(self, time_ns: int) -> float:
+        """Return the plan time (s) left at ``time_ns`` (:meth:`Schedule.time_left`)."""
+        with self._lock:
+            return self._schedule.time_left(max(time_ns, self._last_published_ns))
+
     def moving_at(self, time_ns: int) -> bool:
         """Tell whether the schedule is in motion at ``time_ns`` (a plan not yet at its end)."""
         with self._lock:
@@ -208,9 +213,11 @@ class Stream:
         with self._lock:
             return self._last_published_ns
 
-    def splice(self, start_ns: int, motion: PlannedMotion) -> int | None:
+    def splice(self, start_ns: int, motion: PlannedMotion, tag: object = None) -> int | None:
         """
         Run ``motion`` from ``start_ns``; return the tick (ns) of its first setpoint.
+
+        ``tag`` (the request) comes back from :meth:`set_factor` if the motion is dropped.
 
         That is ``start_ns`` itself if the stream has not got there yet, or the next tick
         if ``start_ns`` is the last setpoint published. ``None``, splicing nothing, if the
@@ -229,7 +236,7 @@ class Stream:
                 first_ns = self._next_tick_ns
                 if first_ns <= self._last_tick_ns:  # the stream is between two ticks
                     first_ns = self._last_tick_ns + self._period_ns()
-            self._schedule.splice(start_ns, motion, self._now_ns())
+            self._schedule.splice(start_ns, motion, self._now_ns(), tag)
             return first_ns
 
     def wait_published(self, time_ns: int, timeout: float) -> bool:
