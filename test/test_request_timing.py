@@ -22,7 +22,8 @@ from traj_gen_ros.node.config import make_config
 from traj_gen_ros.node.motion import held
 from traj_gen_ros.node.parsing import parse_goal
 from traj_gen_ros.node.planning import plan_request
-from traj_gen_ros.node.request_handler import MAX_MARGIN_NS, RequestHandler, SAMPLE_AFTER_FIRST_NS
+from traj_gen_ros.node.request_handler import RequestHandler, SAMPLE_AFTER_FIRST_NS
+from traj_gen_ros.node.start_tick import MAX_MARGIN_NS
 from traj_gen_ros.node.stream import Stream
 from trajectory_msgs.msg import JointTrajectory
 
