@@ -69,7 +69,6 @@ from traj_gen_ros.node.trajectory_tolerances import (
     TOLERANCE_PARAMETERS,
     Tolerances,
 )
-from trajectory_msgs.msg import JointTrajectoryPoint
 
 try:
     from control_msgs.action import FollowJointTrajectory
@@ -341,8 +340,8 @@ class FollowJointTrajectoryServer:
         if now_ns - active.feedback_ns < self._config().period_ns:
             return
         active.feedback_ns = now_ns
-        active.handle.publish_feedback(feedback_message(
-            active.goal.names, active.goal.request.joints, now_ns, desired, measured))
+        active.handle.publish_feedback(active.feedback(
+            FollowJointTrajectory.Feedback(), now_ns, desired, measured))
 
     def _finish(self, active: ActiveGoal, status: str, code: int, text: str) -> None:
         with self._lock:
@@ -372,22 +371,6 @@ class FollowJointTrajectoryServer:
         """Never scheduled (:meth:`_end` gives each goal its own): abort."""
         handle.abort()
         return FollowJointTrajectory.Result(error_code=INVALID_GOAL, error_string='internal')
-
-
-def feedback_message(names: tuple[str, ...], named: np.ndarray, now_ns: int, desired: State,
-                     measured: np.ndarray | None) -> object:
-    """Return the feedback: the goal's joints, the setpoint, the measured state, the error."""
-    actual = desired.position if measured is None else measured
-    feedback = FollowJointTrajectory.Feedback(joint_names=list(names))
-    feedback.header.stamp.sec, feedback.header.stamp.nanosec = divmod(now_ns, 1_000_000_000)
-    feedback.desired = JointTrajectoryPoint(
-        positions=desired.position[named].tolist(),
-        velocities=desired.velocity[named].tolist(),
-        accelerations=desired.acceleration[named].tolist())
-    feedback.actual = JointTrajectoryPoint(positions=actual[named].tolist())
-    feedback.error = JointTrajectoryPoint(
-        positions=(desired.position[named] - actual[named]).tolist())
-    return feedback
 
 
 def create_server(node: Node, handler: RequestHandler, stream: Stream, answers: Answers,

@@ -1,5 +1,5 @@
 """
-A ``~/follow_joint_trajectory`` goal while it runs, and its end on the stream's clock.
+A ``~/follow_joint_trajectory`` goal while it runs: its end on the stream's clock, feedback.
 
 Times are ns of the node clock; positions rad (or m), velocities rad/s.
 """
@@ -11,8 +11,10 @@ from dataclasses import dataclass
 import numpy as np
 from rclpy.action.server import ServerGoalHandle
 from traj_gen_ros.node.answers import Request
+from traj_gen_ros.node.motion import State
 from traj_gen_ros.node.trajectory_goal import TrajectoryGoal
 from traj_gen_ros.node.trajectory_tolerances import Tolerances
+from trajectory_msgs.msg import JointTrajectoryPoint
 
 
 @dataclass
@@ -47,3 +49,24 @@ class ActiveGoal:
                 return max(self.end_ns, now_ns + 1)
             self.at_rest_ns = published_ns
         return max(self.end_ns, self.at_rest_ns)
+
+    def feedback(self, feedback: object, now_ns: int, desired: State,
+                 measured: np.ndarray | None) -> object:
+        """
+        Fill a ``FollowJointTrajectory.Feedback``: the goal's joints, in its order.
+
+        ``desired`` is the commanded setpoint, ``actual`` the measured positions (the
+        setpoint without a measured state) and ``error`` their difference (rad).
+        """
+        named = self.goal.request.joints
+        actual = desired.position if measured is None else measured
+        feedback.joint_names = list(self.goal.names)
+        feedback.header.stamp.sec, feedback.header.stamp.nanosec = divmod(now_ns, 1_000_000_000)
+        feedback.desired = JointTrajectoryPoint(
+            positions=desired.position[named].tolist(),
+            velocities=desired.velocity[named].tolist(),
+            accelerations=desired.acceleration[named].tolist())
+        feedback.actual = JointTrajectoryPoint(positions=actual[named].tolist())
+        feedback.error = JointTrajectoryPoint(
+            positions=(desired.position[named] - actual[named]).tolist())
+        return feedback
