@@ -285,6 +285,7 @@ def action_goal(recorder: Recorder, client, start: np.ndarray, target: np.ndarra
                 sec=seconds, nanosec=int(round((time_from_start - seconds) * 1e9)))))
     count = len(recorder.trajectories)
     first_state = len(recorder.states)
+    answers = len(recorder.received)
     sent = time.time_ns()
     future = client.send_goal_async(FollowJointTrajectory.Goal(trajectory=message))
     recorder.spin_until(future.done)
@@ -295,8 +296,9 @@ def action_goal(recorder: Recorder, client, start: np.ndarray, target: np.ndarra
     start_ns = stamp_of(recorder.trajectories[-1][1])
     recorder.spin_until(lambda: any(row[1] > start_ns for row in recorder.states[first_state:]))
     row = next(row for row in recorder.states[first_state:] if row[1] > start_ns)
-    recorder.spin_until(future.done)
-    return (row[1] - sent) * 1e-6, (row[0] - sent) * 1e-6, future.result()
+    recorder.spin_until(lambda: future.done() and len(recorder.received) > answers)
+    return ((row[1] - sent) * 1e-6, (row[0] - sent) * 1e-6,
+            (row[1] - recorder.received[-1]) * 1e-6, recorder.planning[-1][0], future.result())
 
 
 def action_rows(recorder: Recorder, repeats: int) -> dict:
@@ -311,22 +313,24 @@ def action_rows(recorder: Recorder, repeats: int) -> dict:
             recorder.wait_at_rest()
             recorder.spin_for(random.random() * 0.02)
             here = setpoint(recorder)  # the first point (time 0) is where the arm is
-            published, received, handle = action_goal(
+            *row, handle = action_goal(
                 recorder, client, here, here + (0.05 if index % 2 == 0 else -0.05), 0.0)
             result = handle.get_result_async()
             recorder.spin_until(result.done)
-            rest.append((published, received))
+            rest.append(row)
         recorder.wait_at_rest()
         for _ in range(repeats):  # continuation goals, from where the setpoint is
             here = setpoint(recorder)
             target = here + 0.2  # on in the same direction, as MoveIt's continuations go
-            preempting.append(action_goal(recorder, client, here, target, 0.1)[:2])
+            preempting.append(action_goal(recorder, client, here, target, 0.1)[:4])
             recorder.spin_for(0.1 + random.random() * 0.02)
         recorder.wait_at_rest()
     finally:
         client.destroy()
     return {name: {'first_state_published_ms': percentiles([r[0] for r in rows]),
-                   'first_state_received_ms': percentiles([r[1] for r in rows])}
+                   'first_state_received_ms': percentiles([r[1] for r in rows]),
+                   'first_state_after_arrival_ms': percentiles([r[2] for r in rows]),
+                   'planning_ms': percentiles([r[3] for r in rows])}
             for name, rows in (('from_rest', rest), ('preempting', preempting))}
 
 

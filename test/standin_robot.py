@@ -8,7 +8,9 @@ message ``[index, offset]`` on ``--nudge`` moves joint ``index`` by ``offset`` r
 holds it there for ``--nudge-hold`` s ("by hand": the commands are ignored meanwhile);
 the first nudge also ends ``--omit`` (a joint left out of the messages until then).
 ``--offset`` adds a constant bias to the published positions (a miscalibrated encoder:
-the robot follows the commands, its measured state is off by that much). A message on
+the robot follows the commands, its measured state is off by that much). Velocities are
+published too (the lag's rate of change), plus ``--velocity-offset`` (a joint that does
+not settle, as its driver reports it); ``--no-velocity`` publishes none, as some drivers. A message on
 ``--freeze`` lists joint indices that stop following from then on (empty: all follow
 again); ``[seconds]`` on ``--pause`` publishes nothing for that long (the robot still
 follows: its driver's state output stalled).
@@ -44,6 +46,9 @@ def parse(argv):
     parser.add_argument('--nudge-hold', type=float, default=1.0, help='s')
     parser.add_argument('--offset', default='',
                         help='bias of the published positions, comma separated (rad)')
+    parser.add_argument('--velocity-offset', default='',
+                        help='bias of the published velocities, comma separated (rad/s)')
+    parser.add_argument('--no-velocity', action='store_true', help='publish no velocities')
     parser.add_argument('--freeze', default='/robot/freeze')
     parser.add_argument('--pause', default='/robot/pause')
     return parser.parse_args(argv)
@@ -62,6 +67,9 @@ class StandInRobot(Node):
         self.omitting = bool(args.omit)
         self.offset = [float(x) for x in args.offset.split(',')] if args.offset \
             else [0.0] * len(self.names)
+        self.velocity_offset = [float(x) for x in args.velocity_offset.split(',')] \
+            if args.velocity_offset else [0.0] * len(self.names)
+        self.velocity = [0.0] * len(self.names)
         self.frozen = {self.names.index(args.frozen)} if args.frozen else set()
         self.silent_until = 0.0
         reliability = (ReliabilityPolicy.RELIABLE if args.reliability == 'reliable'
@@ -98,17 +106,24 @@ class StandInRobot(Node):
         gain = 1.0 - math.exp(-self.period / self.args.tau)
         if self.command is not None:
             for index in range(len(self.names)):
+                step = 0.0
                 if index not in self.frozen and now >= self.held_until[index]:
-                    self.position[index] += (self.command[index] - self.position[index]) * gain
+                    step = (self.command[index] - self.position[index]) * gain
+                self.position[index] += step
+                self.velocity[index] = step / self.period
         if now < self.silent_until:
             return
         names = [n for n in self.args.extra.split(',') if n] + self.names[::-1]
         measured = [p + o for p, o in zip(self.position, self.offset, strict=True)]
         positions = [0.5] * (len(names) - len(self.names)) + measured[::-1]
+        speeds = [v + o for v, o in zip(self.velocity, self.velocity_offset, strict=True)]
+        velocities = [0.0] * (len(names) - len(self.names)) + speeds[::-1]
         if self.omitting:
             keep = [i for i, n in enumerate(names) if n != self.args.omit]
             names, positions = [names[i] for i in keep], [positions[i] for i in keep]
-        message = JointState(name=names, position=positions)
+            velocities = [velocities[i] for i in keep]
+        message = JointState(name=names, position=positions,
+                             velocity=[] if self.args.no_velocity else velocities)
         message.header.stamp = self.get_clock().now().to_msg()
         self.publisher.publish(message)
 

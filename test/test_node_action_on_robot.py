@@ -193,8 +193,11 @@ def test_start_is_checked_against_the_measured_position_and_feedback_is_measured
                            OFFSET[order], atol=2e-3)
 
 
-def test_goal_tolerance_met_by_a_robot_that_follows():
-    with session('-p', 'goal_tolerance:=[0.01]') as (probe, _):
+@pytest.mark.parametrize('velocities', [[], ['--no-velocity']],
+                         ids=['velocities reported', 'no velocities'])
+def test_goal_tolerance_met_by_a_robot_that_follows(velocities):
+    """A robot that follows settles within goal_tolerance and stopped_velocity_tolerance."""
+    with session('-p', 'goal_tolerance:=[0.01]', robot=velocities) as (probe, _):
         setpoint, arm = probe.settled()
         for own in ([], [JointTolerance(name='joint_1', position=0.002)]):
             target = setpoint + [0.6, -0.3, 0, 0, 0, 0]
@@ -233,6 +236,21 @@ def test_goal_tolerance_violated_by_a_joint_that_freezes_near_the_end():
         assert error == pytest.approx(target[0] - frozen, rel=1e-5) and error > 0.05
         end_ns = plan_end_ns(probe)
         assert end_ns + 0.25e9 <= arrival < sent + moveit_timeout_ns(3.0)
+
+
+def test_a_joint_that_does_not_settle_violates_stopped_velocity_tolerance():
+    """Within goal_tolerance but measured moving: JTC's "still" check, by name."""
+    with session('-p', 'goal_tolerance:=[0.01]', '-p', 'stopped_velocity_tolerance:=0.02',
+                 robot=['--velocity-offset', '0,0,0.05,0,0,0']) as (probe, _):
+        setpoint, arm = probe.settled()
+        target = setpoint + [0.3, 0, 0, 0, 0, 0]
+        handle = probe.send([(arm, 0.0), (target, 1.0)])
+        status, code, text, _ = probe.result(handle)
+        assert (status, code) == (ABORTED, Result.GOAL_TOLERANCE_VIOLATED), text
+        found = re.fullmatch(r"joint 'joint_3' still moves at (\S+) rad/s, above "
+                             r'stopped_velocity_tolerance 0.02 rad/s 0.25 s after the end',
+                             text)
+        assert found and float(found.group(1)) == pytest.approx(0.05, abs=1e-9), text
 
 
 def test_goal_tolerance_of_the_goal_itself_violated_by_a_robot_that_lags():

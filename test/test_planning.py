@@ -25,7 +25,7 @@ from traj_gen_ros.node.planning import (
     via_points,
 )
 from traj_gen_ros.node.schedule import Schedule
-from traj_gen_ros.node.wire import peek_via_points, read_goal
+from traj_gen_ros.node.wire import peek_via_points, read_goal, read_joint_state
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 JOINTS = ['a', 'b', 'c']
@@ -237,6 +237,10 @@ def test_read_goal_reads_what_rclpy_serialises(frame_id, names, positions, veloc
     assert (read_frame, read_names) == (expected.header.frame_id, list(expected.name))
     np.testing.assert_array_equal(read_positions, np.array(expected.position, dtype=float))
     assert read_positions.dtype == np.float64 and read_positions.flags.writeable
+    *same, read_velocities = read_joint_state(data)  # the measured state's: and velocities
+    assert same[:2] == [read_frame, read_names]
+    np.testing.assert_array_equal(same[2], read_positions)
+    np.testing.assert_array_equal(read_velocities, np.array(expected.velocity, dtype=float))
 
 
 def test_read_goal_leaves_what_it_cannot_read_to_rclpy():
@@ -244,6 +248,10 @@ def test_read_goal_leaves_what_it_cannot_read_to_rclpy():
     data = serialize_message(message)
     assert read_goal(data[:-24]) is None  # cut inside the positions
     assert read_goal(data[:14]) is None  # cut inside a name
+    moving = serialize_message(JointState(name=['a', 'b'], position=[1.0, 2.0],
+                                          velocity=[3.0, 4.0]))
+    assert read_joint_state(moving)[3].tolist() == [3.0, 4.0]
+    assert read_joint_state(moving[:-16]) is None  # cut inside the velocities
     assert read_goal(b'\x00\x00' + data[2:]) is None  # big-endian CDR: rclpy reads it
     corrupt = bytearray(data)
     corrupt[20:22] = b'\xff\xfe'  # not UTF-8 inside the first name

@@ -21,10 +21,14 @@ checked and planned in :mod:`traj_gen_ros.node.trajectory_goal`, the tolerances 
   published the trajectory's end (and, with a measured state, the arm is within
   ``goal_tolerance`` and still).
 
-The terminal state and result are set by an execute callback scheduled only when the goal
-ends (:meth:`ActionServer.notify_execute`): Jazzy's executor resumes an ``async`` one on
-every spin, a busy loop beside the stream thread. All runs on the executor thread but
-:meth:`_on_request_accepted`, which records under a lock what the monitor then ends.
+The action server's goal, cancel and result services are served by the request thread
+(:mod:`traj_gen_ros.node.request_thread`), as ``~/goal`` is: a goal is planned and spliced
+there as soon as DDS delivers it. The terminal state and result are set by an execute
+callback scheduled on the executor only when the goal ends
+(:meth:`ActionServer.notify_execute`): Jazzy's executor resumes an ``async`` one on every
+spin, a busy loop beside the stream thread. The monitor runs on the executor; what the
+two threads share (the active goal, the replaced ones) is kept under a lock, and a goal
+is watched only once it is fully started.
 
 Feedback: ``joint_names`` the goal's, in its order; ``desired`` the setpoint (position,
 velocity, acceleration) at the monitor tick; ``actual`` the measured positions (else the
@@ -36,11 +40,13 @@ from __future__ import annotations
 
 from collections.abc import Callable
 import threading
+import time
 
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.action import ActionServer, CancelResponse
 from rclpy.action.server import GoalEvent, ServerGoalHandle
+from rclpy.callback_groups import CallbackGroup
 from rclpy.node import Node
 from traj_gen_ros.node.answers import Answers, Request
 from traj_gen_ros.node.config import Config
@@ -96,7 +102,8 @@ class FollowJointTrajectoryServer:
                  config: Callable[[], Config], now_ns: Callable[[], int],
                  measured_positions: Callable[[], np.ndarray | None] = lambda: None,
                  measured_velocities: Callable[[], np.ndarray | None] = lambda: None,
-                 reseed_to_measured: Callable[[], None] | None = None) -> None:
+                 reseed_to_measured: Callable[[], None] | None = None,
+                 callback_group: CallbackGroup | None = None) -> None:
         """
         Serve ``~/follow_joint_trajectory`` on ``node`` through ``handler``.
 
@@ -106,6 +113,8 @@ class FollowJointTrajectoryServer:
         :param reseed_to_measured: hold where the arm is after a path-tolerance violation;
             default: brake to rest within the limits. ``measured_age`` (attribute): s
             since the measured state arrived.
+        :param callback_group: the action server's (a ``NotForTheExecutor``, whose
+            thread then serves :attr:`action_server`); default the node's.
         """
         self._node = node
         self._handler = handler
@@ -136,7 +145,13 @@ class FollowJointTrajectoryServer:
         self._timer.cancel()
         self._server = ActionServer(
             node, FollowJointTrajectory, '~/follow_joint_trajectory', self._unexpected,
-            handle_accepted_callback=self._start, cancel_callback=self._on_cancel)
+            handle_accepted_callback=self._start, cancel_callback=self._on_cancel,
+            callback_group=callback_group)
+
+    @property
+    def action_server(self) -> ActionServer:
+        """The rclpy action server (a waitable for the thread that serves it)."""
+        return self._server
 
     # ------------------------------------------------------------------ parameters
 
@@ -160,12 +175,13 @@ class FollowJointTrajectoryServer:
     # ------------------------------------------------------------------ a new goal
 
     def _start(self, handle: ServerGoalHandle) -> None:
-        """Mark an accepted goal executing, then refuse it or splice it in (executor thread)."""
+        """Mark an accepted goal executing, then refuse it or splice it in (request thread)."""
+        received = time.time_ns()  # as ~/goal's: system ns, when its thread takes it
         handle._update_state(GoalEvent.EXECUTE)  # what execute() does, minus scheduling
         message = handle.request
         trajectory = message.trajectory
-        request = Request(KIND, self._answers.values(KIND, trajectory.header.frame_id), 0,
-                          None)
+        request = Request(KIND, self._answers.values(KIND, trajectory.header.frame_id,
+                                                     received), 0, None)
         try:
             active = self._parse(handle, request)
             self._starting = active
@@ -226,6 +242,9 @@ class FollowJointTrajectoryServer:
             self._log.warning(f'{KIND} goal: {goal.slowed}: lasts '
                               f'{motion.plan.duration:.4g} s instead of {goal.duration:.4g} s')
         self._timer.reset()
+        executor = self._node.executor
+        if executor is not None:
+            executor.wake()  # its wait began without the monitor timer
 
     def _on_request_accepted(self, request: Request, start_ns: int) -> None:
         """Any request spliced in (any thread): the one it replaces ends (:meth:`_monitor`)."""
@@ -258,7 +277,7 @@ class FollowJointTrajectoryServer:
     # ------------------------------------------------------------------ cancel
 
     def _on_cancel(self, handle: ServerGoalHandle) -> CancelResponse:
-        """Accept a cancel of the active goal and brake to rest (executor thread)."""
+        """Accept a cancel of the active goal and brake to rest (request thread)."""
         try:
             with self._lock:
                 active = self._active
@@ -292,7 +311,7 @@ class FollowJointTrajectoryServer:
                 status = CANCELED if goal.cancel is not None else ABORTED
                 self._end(goal.handle, status, INVALID_GOAL if status == ABORTED
                           else SUCCESSFUL, goal.replaced)
-            if active is not None:
+            if active is not None and active.target is not None:  # started (_started)
                 self._watch(active)
             if self._active is None and not self._replaced:
                 self._timer.cancel()
@@ -374,11 +393,13 @@ class FollowJointTrajectoryServer:
 
 
 def create_server(node: Node, handler: RequestHandler, stream: Stream, answers: Answers,
-                  config: Callable[[], Config], now_ns: Callable[[], int]
+                  config: Callable[[], Config], now_ns: Callable[[], int],
+                  callback_group: CallbackGroup | None = None
                   ) -> FollowJointTrajectoryServer | None:
     """Create the action server, or say once (info) why there is none and return None."""
     if FollowJointTrajectory is None:
         node.get_logger().info(f'control_msgs is not importable ({UNAVAILABLE}): running '
                                'without ~/follow_joint_trajectory')
         return None
-    return FollowJointTrajectoryServer(node, handler, stream, answers, config, now_ns)
+    return FollowJointTrajectoryServer(node, handler, stream, answers, config, now_ns,
+                                       callback_group=callback_group)

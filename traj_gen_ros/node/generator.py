@@ -159,7 +159,9 @@ class TrajectoryGenerator(Node):
         # ~/follow_joint_trajectory where control_msgs is importable (follow_joint_trajectory)
         self.follow_joint_trajectory = create_server(
             self, self._requests, self._stream, self._answers, lambda: self._config,
-            self._now_ns)
+            self._now_ns, callback_group=requests_only)
+        if self.follow_joint_trajectory is not None:
+            self._request_thread.serve(self.follow_joint_trajectory.action_server)
         if self.follow_joint_trajectory is not None and self.feedback is not None:
             self._wire_measured_state(self.follow_joint_trajectory, self.feedback)
         self.speed_scaling = SpeedScalingInput(self, self._stream, self._requests.dropped)
@@ -183,6 +185,7 @@ class TrajectoryGenerator(Node):
         """Check the action's start and tolerances against the measured state."""
         measured = feedback.measured
         server.measured_positions = lambda: None if measured.lost else measured.position
+        server.measured_velocities = lambda: None if measured.lost else measured.velocity
         server.measured_age = lambda: time.monotonic() - measured.received_at
         server.reseed_to_measured = lambda: feedback.hold_where_measured(
             'path tolerance violated')

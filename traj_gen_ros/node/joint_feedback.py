@@ -3,8 +3,9 @@
 
 The ROS side of :mod:`traj_gen_ros.node.measured_state`: a ``sensor_msgs/JointState``
 subscription (best effort, so reliable and best-effort publishers both match), read off
-the wire (:func:`traj_gen_ros.node.wire.read_goal`) on the executor thread, and a timer that
-watches ``joint_topic_timeout``:
+the wire (:func:`traj_gen_ros.node.wire.read_joint_state`: positions, and velocities where
+the driver reports them) on the executor thread, and a timer that watches
+``joint_topic_timeout``:
 
 * the first valid message seeds the stream (:meth:`Stream.seed`): it starts there, at rest;
 * a valid message while the node holds still, farther than ``state_tolerance`` from the
@@ -29,7 +30,7 @@ from traj_gen_ros.node.measured_state import MeasuredState
 from traj_gen_ros.node.motion import State
 from traj_gen_ros.node.request_handler import RequestHandler
 from traj_gen_ros.node.stream import Stream
-from traj_gen_ros.node.wire import read_goal
+from traj_gen_ros.node.wire import read_joint_state
 
 #: Depth of the measured-state subscription (best effort: only the newest matters).
 DEPTH = 10
@@ -63,16 +64,17 @@ class JointFeedback:
 
     def _on_message(self, data: bytes, info: dict) -> None:
         del info
-        fields = read_goal(data)
+        fields = read_joint_state(data)
         if fields is None:  # not little-endian CDR: let rclpy read it
             try:
                 message = deserialize_message(data, JointState)
             except Exception:  # noqa: BLE001 - a bad message must never kill the node
                 self.measured.incomplete += 1
                 return
-            fields = message.header.frame_id, message.name, message.position
+            fields = (message.header.frame_id, message.name, message.position,
+                      message.velocity)
         was_lost = self.measured.lost
-        position = self.measured.read(fields[1], fields[2], time.monotonic())
+        position = self.measured.read(fields[1], fields[2], time.monotonic(), fields[3])
         if position is None:
             return
         if was_lost:

@@ -59,6 +59,8 @@ class MeasuredState:
                                    'non-negative', joints=self.joints)
         self.timeout = check_timeout(timeout)
         self.position: np.ndarray | None = None  # the latest valid positions (rad)
+        #: The latest message's velocities (rad/s), None when it had none (or not finite).
+        self.velocity: np.ndarray | None = None
         self.received_at = 0.0  # time.monotonic() of the latest valid message
         self.valid = 0
         self.incomplete = 0  # messages lacking one of the joints
@@ -69,12 +71,15 @@ class MeasuredState:
         self._names: tuple[str, ...] = ()
         self._columns = np.zeros(0, dtype=int)
 
-    def read(self, names: Sequence[str], positions: np.ndarray, now: float) -> np.ndarray | None:
+    def read(self, names: Sequence[str], positions: np.ndarray, now: float,
+             velocities: Sequence[float] = ()) -> np.ndarray | None:
         """
-        Take one message's ``name`` and ``position``; return the positions in joint order.
+        Take one message's ``name``, ``position`` and ``velocity``; return the positions.
 
-        ``None`` (and counted) when a joint is missing, the lengths disagree or a position
-        is not finite. ``now`` is ``time.monotonic()`` (s).
+        Positions in joint order; ``None`` (and counted) when a joint is missing, the
+        lengths disagree or a position is not finite. ``velocities`` (rad/s) are kept in
+        :attr:`velocity` when there is one per name, all finite (``JointState`` may leave
+        them empty); else :attr:`velocity` is None. ``now`` is ``time.monotonic()`` (s).
         """
         names = tuple(names)
         if names != self._names:  # usually the same list every message: map it once
@@ -93,6 +98,11 @@ class MeasuredState:
             return None
         self.valid += 1
         self.position = position
+        velocity = None
+        if len(velocities) == len(names):
+            velocity = np.asarray(velocities, dtype=float)[self._columns]
+            velocity = velocity if np.isfinite(velocity).all() else None
+        self.velocity = velocity
         self.received_at = now
         self.lost = False
         return position

@@ -187,18 +187,19 @@ def slow_down(plan: Trajectory, config: Config) -> tuple[float, str]:
     """
     Return the smallest uniform slow-down ``s >= 1`` that fits the limits, and why.
 
-    ``s = max(1, v_peak/v_max, sqrt(a_peak/a_max))`` over the joints, from the exact peaks;
-    a ratio within the core's ``LIMIT_TOLERANCE`` counts as fitting. The text names the
-    joint and quantity that set it, e.g. ``joint 'joint_1' velocity 2.06 rad/s above
-    max_velocity 2 rad/s``.
+    ``s = max(1, v_peak/v_max, sqrt(a_peak/a_max))`` over the joints, from the exact peaks.
+    ``s = 1`` exactly when ``plan`` is within the limits as the core's ``limit_violation``
+    judges it (a peak within ``LIMIT_TOLERANCE`` of its limit fits), so a plan that is not
+    slowed needs no second check. The text names the joint and quantity that set it, e.g.
+    ``joint 'joint_1' velocity 2.06 rad/s above max_velocity 2 rad/s``.
     """
     velocity, acceleration = plan.peaks()
-    ratios = np.vstack([velocity / config.max_velocity,
-                        np.sqrt(acceleration / config.max_acceleration)])
+    over = np.vstack([velocity / config.max_velocity, acceleration / config.max_acceleration])
+    if np.count_nonzero(over <= 1.0 + LIMIT_TOLERANCE) == over.size:
+        return 1.0, ''
+    ratios = np.vstack([over[0], np.sqrt(over[1])])
     quantity, joint = divmod(int(np.argmax(ratios)), ratios.shape[1])
     factor = float(ratios[quantity, joint])
-    if not factor > 1.0 + LIMIT_TOLERANCE:
-        return 1.0, ''
     name = config.joints[joint]
     if quantity == 0:
         why = (f'joint {name!r} velocity {velocity[joint]:.6g} rad/s above max_velocity '
@@ -270,11 +271,11 @@ def _plan(config: Config, state: State, hold_at: np.ndarray, goal: TrajectoryGoa
         plan = build(factor)
         goal.factor = factor
         goal.slowed = f'slowed by a factor of {factor:.6g} ({why})'
-    violation = limit_violation(plan, config.max_velocity, config.max_acceleration)
-    if violation is not None:  # a moving start whose velocity cannot be slowed
-        raise GoalError(INVALID_GOAL, 'infeasible even slowed down uniformly: '
-                        f'{violation.describe(config.joints)} (from the current motion; '
-                        'send it when the arm moves slower)')
+        violation = limit_violation(plan, config.max_velocity, config.max_acceleration)
+        if violation is not None:  # a moving start whose velocity cannot be slowed
+            raise GoalError(INVALID_GOAL, 'infeasible even slowed down uniformly: '
+                            f'{violation.describe(config.joints)} (from the current '
+                            'motion; send it when the arm moves slower)')
     motion = check_size(PlannedMotion(plan, kind, points[-1], goal.slowed), config)
     if config.limits is not None:
         check_plan(config.limits, plan, state.position)

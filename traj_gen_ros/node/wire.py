@@ -2,8 +2,8 @@
 The messages the node reads and writes in CDR, with numpy: its wire format in and out.
 
 Out: ``JointTrajectory``, ``JointState`` and ``Float64MultiArray``. In: a goal's
-``frame_id``, names and positions (:func:`read_goal`; also the measured state of
-``joint_topic``), and a via request's point count (:func:`peek_via_points`), so a huge
+``frame_id``, names and positions (:func:`read_goal`), the measured state of
+``joint_topic`` (the same and its velocities: :func:`read_joint_state`), and a via request's point count (:func:`peek_via_points`), so a huge
 message is refused before it is deserialised.
 
 Building a 1000-point ``JointTrajectory`` as rclpy message objects costs tens of
@@ -190,6 +190,17 @@ def read_goal(data: bytes) -> tuple[str, list[str], np.ndarray] | None:
     (another encapsulation, cut short, not UTF-8): the caller deserialises those. Reading
     the three fields costs a few microseconds; an rclpy message, tens.
     """
+    fields = read_joint_state(data)
+    return None if fields is None else fields[:3]
+
+
+def read_joint_state(data: bytes) -> tuple[str, list[str], np.ndarray, np.ndarray] | None:
+    """
+    Read ``header.frame_id``, ``name``, ``position`` and ``velocity`` of a CDR ``JointState``.
+
+    As :func:`read_goal`, and ``velocity`` after the positions (uint32 count, float64s
+    aligned to 8; often empty: a driver that reports none).
+    """
     if data[:2] != b'\x00\x01':
         return None
     try:
@@ -199,12 +210,19 @@ def read_goal(data: bytes) -> tuple[str, list[str], np.ndarray] | None:
         for _ in range(count):
             name, offset = _read_string(data, offset)
             names.append(name)
-        count, offset = _read_count(data, offset)
-        offset = (offset + 7) & ~7 if count else offset
-        positions = np.frombuffer(data, '<f8', count, 4 + offset).astype(float)
+        positions, offset = _read_doubles(data, offset)
+        velocities, offset = _read_doubles(data, offset)
     except (ValueError, struct.error):  # UnicodeDecodeError is a ValueError
         return None
-    return frame_id, names, positions
+    return frame_id, names, positions, velocities
+
+
+def _read_doubles(data: bytes, offset: int) -> tuple[np.ndarray, int]:
+    """Read a CDR ``float64[]`` at ``offset`` (from the encapsulation's end); ValueError."""
+    count, offset = _read_count(data, offset)
+    offset = (offset + 7) & ~7 if count else offset
+    values = np.frombuffer(data, '<f8', count, 4 + offset).astype(float)
+    return values, offset + 8 * count
 
 
 def peek_via_points(data: bytes) -> tuple[str, int]:
