@@ -10,10 +10,10 @@ the first nudge also ends ``--omit`` (a joint left out of the messages until the
 ``--offset`` adds a constant bias to the published positions (a miscalibrated encoder:
 the robot follows the commands, its measured state is off by that much). Velocities are
 published too (the lag's rate of change), plus ``--velocity-offset`` (a joint that does
-not settle, as its driver reports it); ``--no-velocity`` publishes none, as some drivers. A message on
-``--freeze`` lists joint indices that stop following from then on (empty: all follow
-again); ``[seconds]`` on ``--pause`` publishes nothing for that long (the robot still
-follows: its driver's state output stalled).
+not settle, as its driver reports it); ``--no-velocity`` publishes none, as some
+drivers. A message on ``--freeze`` lists joint indices that stop following from then on
+(empty: all follow again); ``[seconds]`` on ``--pause`` publishes nothing for that long
+(the robot still follows: its driver's state output stalled).
 """
 
 import argparse

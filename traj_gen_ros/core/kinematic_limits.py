@@ -72,14 +72,21 @@ def limit_violation(
     Return the worst excess over the limits (``(joints,)`` arrays), or ``None`` if within.
 
     The excess is measured relative to the limit; ``LIMIT_TOLERANCE`` of it is allowed.
+    The exact peaks are found only where the pieces' Bernstein bounds (never below the
+    peaks: :meth:`Trajectory.peak_bounds`) are not already within the limits.
     """
     limits = [np.asarray(max_velocity, dtype=float), np.asarray(max_acceleration, dtype=float)]
     names = ['velocity', 'acceleration']
+    if max_jerk is not None:
+        limits.append(np.asarray(max_jerk, dtype=float))
+    bounds = trajectory.peak_bounds(len(limits))
+    if all(np.count_nonzero(bound <= limit) == bound.size
+           for bound, limit in zip(bounds, limits, strict=True)):
+        return None
     if max_jerk is None:
         peaks = list(trajectory.peaks()[:2])
     else:
         peaks = list(trajectory.peaks_with_jerk())
-        limits.append(np.asarray(max_jerk, dtype=float))
         names.append('jerk')
     ratios = np.array([peak / limit for peak, limit in zip(peaks, limits, strict=True)])
     if np.count_nonzero(ratios <= 1.0 + LIMIT_TOLERANCE) == ratios.size:

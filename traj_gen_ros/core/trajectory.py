@@ -15,7 +15,12 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from traj_gen_ros.core.exact.piece_extrema import derivative, peak_abs, position_extrema
+from traj_gen_ros.core.exact.piece_extrema import (
+    derivative,
+    peak_abs,
+    peak_bounds,
+    position_extrema,
+)
 
 # Samples per piece above which each piece is evaluated as one matrix product.
 _SAMPLES_PER_PIECE_FOR_MATMUL = 16
@@ -117,12 +122,26 @@ class Trajectory:
         peak_velocity, peak_acceleration, peak_jerk = self._peaks(3)
         return peak_velocity, peak_acceleration, peak_jerk
 
+    def peak_bounds(self, orders: int = 2) -> list[np.ndarray]:
+        """
+        Upper bounds of ``|velocity|``, ``|acceleration|`` (and ``|jerk|``, ``orders`` 3).
+
+        ``(joints,)`` each, never below :meth:`peaks`' values: the largest Bernstein
+        coefficient of each piece (:func:`~traj_gen_ros.core.exact.piece_extrema.
+        peak_bounds`), a cheap first check before the exact peaks.
+        """
+        return peak_bounds(self._piece_durations(self.joint_count), *self._series(orders))
+
     def _peaks(self, orders: int) -> list[np.ndarray]:
         """Exact peaks of the first ``orders`` derivatives, in one call."""
+        return peak_abs(self._piece_durations(self.joint_count), *self._series(orders))
+
+    def _series(self, orders: int) -> list[np.ndarray]:
+        """Coefficients of the first ``orders`` derivatives."""
         series = [derivative(self.coefficients)]
         for _ in range(orders - 1):
             series.append(derivative(series[-1]))
-        return peak_abs(self._piece_durations(self.joint_count), *series)
+        return series
 
     def _piece_durations(self, joint_count: int) -> np.ndarray:
         """Each piece's length (s) per joint, ``(pieces, joints)``."""

@@ -125,6 +125,8 @@ class FollowJointTrajectoryServer:
         self.measured_positions = measured_positions
         self.measured_velocities = measured_velocities
         self.measured_age: Callable[[], float] = lambda: 0.0
+        #: When the goal arrived (system ns): the request thread's wake-up (attribute).
+        self.arrival_ns: Callable[[], int] = time.time_ns
         self.reseed_to_measured = reseed_to_measured or self._hold
         self._log = node.get_logger()
         self._lock = threading.Lock()
@@ -176,7 +178,7 @@ class FollowJointTrajectoryServer:
 
     def _start(self, handle: ServerGoalHandle) -> None:
         """Mark an accepted goal executing, then refuse it or splice it in (request thread)."""
-        received = time.time_ns()  # as ~/goal's: system ns, when its thread takes it
+        received = self.arrival_ns()  # as ~/goal's 'received': system ns
         handle._update_state(GoalEvent.EXECUTE)  # what execute() does, minus scheduling
         message = handle.request
         trajectory = message.trajectory

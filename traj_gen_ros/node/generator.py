@@ -162,6 +162,7 @@ class TrajectoryGenerator(Node):
             self._now_ns, callback_group=requests_only)
         if self.follow_joint_trajectory is not None:
             self._request_thread.serve(self.follow_joint_trajectory.action_server)
+            self.follow_joint_trajectory.arrival_ns = lambda: self._request_thread.ready_ns
         if self.follow_joint_trajectory is not None and self.feedback is not None:
             self._wire_measured_state(self.follow_joint_trajectory, self.feedback)
         self.speed_scaling = SpeedScalingInput(self, self._stream, self._requests.dropped)

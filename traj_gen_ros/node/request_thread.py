@@ -26,6 +26,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 import contextlib
 import threading
+import time
 
 from rclpy.callback_groups import CallbackGroup
 from rclpy.context import Context
@@ -68,6 +69,8 @@ class RequestThread:
         self._waitables: list[Waitable] = []
         self._log_error = log_error
         self._wake = GuardCondition(None, None, context=context)
+        #: When the last wait returned (system ns): an action goal's arrival.
+        self.ready_ns = 0
         self._stopping = threading.Event()
         self._thread = threading.Thread(target=self._run, name='requests', daemon=True)
 
@@ -126,6 +129,7 @@ class RequestThread:
             for waitable in waitables:
                 waitable.add_to_wait_set(wait_set)
             wait_set.wait(WAIT_NS)
+            self.ready_ns = time.time_ns()
             ready = wait_set.get_ready_entities('subscription')
             ready_waitables = [w for w in waitables if w.is_ready(wait_set)]
         return [s for s in subscriptions if s.handle.pointer in ready], ready_waitables

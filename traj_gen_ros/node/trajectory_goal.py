@@ -193,8 +193,11 @@ def slow_down(plan: Trajectory, config: Config) -> tuple[float, str]:
     slowed needs no second check. The text names the joint and quantity that set it, e.g.
     ``joint 'joint_1' velocity 2.06 rad/s above max_velocity 2 rad/s``.
     """
+    limits = np.vstack([config.max_velocity, config.max_acceleration])
+    if np.count_nonzero(np.vstack(plan.peak_bounds()) <= limits) == limits.size:
+        return 1.0, ''  # within even the Bernstein bounds: no peaks to find
     velocity, acceleration = plan.peaks()
-    over = np.vstack([velocity / config.max_velocity, acceleration / config.max_acceleration])
+    over = np.vstack([velocity, acceleration]) / limits
     if np.count_nonzero(over <= 1.0 + LIMIT_TOLERANCE) == over.size:
         return 1.0, ''
     ratios = np.vstack([over[0], np.sqrt(over[1])])

@@ -3,8 +3,9 @@ The messages the node reads and writes in CDR, with numpy: its wire format in an
 
 Out: ``JointTrajectory``, ``JointState`` and ``Float64MultiArray``. In: a goal's
 ``frame_id``, names and positions (:func:`read_goal`), the measured state of
-``joint_topic`` (the same and its velocities: :func:`read_joint_state`), and a via request's point count (:func:`peek_via_points`), so a huge
-message is refused before it is deserialised.
+``joint_topic`` (the same and its velocities: :func:`read_joint_state`), and a via
+request's point count (:func:`peek_via_points`), so a huge message is refused before
+it is deserialised.
 
 Building a 1000-point ``JointTrajectory`` as rclpy message objects costs tens of
 milliseconds (one Python object per point, one check per float). Its wire form is plain:

@@ -59,7 +59,8 @@ def _polished(slope: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 def _linear_roots(c0: np.ndarray, c1: np.ndarray) -> np.ndarray:
     """Root of ``c0 + c1 τ`` per row, ``(count, 1)``; 0 where there is none."""
-    return (-c0 / np.where(c1 == 0.0, np.inf, c1))[:, None]
+    with np.errstate(over='ignore'):  # a root beyond ±1e308 is clipped to [0, 1] anyway
+        return (-c0 / np.where(c1 == 0.0, np.inf, c1))[:, None]
 
 
 def _quadratic_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> np.ndarray:
@@ -73,8 +74,9 @@ def _quadratic_roots(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray) -> np.ndarr
     half = -0.5 * (c1 + np.copysign(np.sqrt(np.maximum(delta, 0.0)), c1))
     real = (delta >= 0.0) & (half != 0.0)
     roots = np.zeros((c0.size, 2))
-    np.divide(half, c2, out=roots[:, 0], where=real & (c2 != 0.0))
-    np.divide(c0, half, out=roots[:, 1], where=real)
+    with np.errstate(over='ignore'):  # a root beyond ±1e308 is clipped to [0, 1] anyway
+        np.divide(half, c2, out=roots[:, 0], where=real & (c2 != 0.0))
+        np.divide(c0, half, out=roots[:, 1], where=real)
     return roots
 
 
