@@ -152,7 +152,7 @@ class FollowJointTrajectoryServer:
 
     @property
     def action_server(self) -> ActionServer:
-        """The rclpy action server (a waitable for the thread that serves it)."""
+        """Give the rclpy action server (a waitable for the thread that serves it)."""
         return self._server
 
     # ------------------------------------------------------------------ parameters
