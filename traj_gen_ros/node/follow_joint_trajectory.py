@@ -51,15 +51,12 @@ from rclpy.node import Node
 from traj_gen_ros.node.answers import Answers, Request
 from traj_gen_ros.node.config import Config
 from traj_gen_ros.node.motion import PlannedMotion, State
-from traj_gen_ros.node.parsing import seconds
 from traj_gen_ros.node.request_handler import brake_planner, RequestHandler
-from traj_gen_ros.node.running_goal import ActiveGoal
+from traj_gen_ros.node.running_goal import ActiveGoal, read_goal_message
 from traj_gen_ros.node.stream import Stream
 from traj_gen_ros.node.trajectory_goal import (
-    check_stamp,
     GoalError,
     INVALID_GOAL,
-    parse_trajectory_goal,
     PATH_TOLERANCE_VIOLATED,
     plan_trajectory_goal,
     SUCCESSFUL,
@@ -68,7 +65,6 @@ from traj_gen_ros.node.trajectory_goal import (
 from traj_gen_ros.node.trajectory_tolerances import (
     ABORTED,
     CANCELED,
-    goal_tolerances,
     outcome,
     read_defaults,
     SUCCEEDED,
@@ -185,7 +181,8 @@ class FollowJointTrajectoryServer:
         request = Request(KIND, self._answers.values(KIND, trajectory.header.frame_id,
                                                      received), 0, None)
         try:
-            active = self._parse(handle, request)
+            active = read_goal_message(handle, request, self._config().joints,
+                                       self._defaults[1], self._now_ns())
             self._starting = active
             motion = self._handler.submit(request, self._planner(active))
         except GoalError as error:
@@ -204,25 +201,6 @@ class FollowJointTrajectoryServer:
             self._end(handle, ABORTED, refusal.code, str(refusal))
             return
         self._started(active, motion)
-
-    def _parse(self, handle: ServerGoalHandle, request: Request) -> ActiveGoal:
-        message = handle.request
-        trajectory = message.trajectory
-        stamp = trajectory.header.stamp
-        points = [(p.positions, p.velocities, p.accelerations, seconds(p.time_from_start))
-                  for p in trajectory.points]
-        joints = self._config().joints
-        goal = parse_trajectory_goal(joints, trajectory.joint_names, points,
-                                     stamp.sec * 1_000_000_000 + stamp.nanosec,
-                                     len(message.multi_dof_trajectory.points))
-        tolerances = goal_tolerances(
-            self._defaults[1], joints,
-            [(t.name, t.position) for t in message.path_tolerance],
-            [(t.name, t.position) for t in message.goal_tolerance],
-            seconds(message.goal_time_tolerance))
-        check_stamp(goal, self._now_ns())
-        request.request, request.stamp_ns = goal, goal.stamp_ns
-        return ActiveGoal(handle, goal, request, tolerances)
 
     def _planner(self, active: ActiveGoal) -> Callable[..., PlannedMotion]:
         tolerance = self._defaults[0]

@@ -1,19 +1,21 @@
 """
-A ``~/follow_joint_trajectory`` goal while it runs: its end on the stream's clock, feedback.
+A ``~/follow_joint_trajectory`` goal: read from its message; its end and feedback as it runs.
 
 Times are ns of the node clock; positions rad (or m), velocities rad/s.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from rclpy.action.server import ServerGoalHandle
 from traj_gen_ros.node.answers import Request
 from traj_gen_ros.node.motion import State
-from traj_gen_ros.node.trajectory_goal import TrajectoryGoal
-from traj_gen_ros.node.trajectory_tolerances import Tolerances
+from traj_gen_ros.node.parsing import seconds
+from traj_gen_ros.node.trajectory_goal import check_stamp, parse_trajectory_goal, TrajectoryGoal
+from traj_gen_ros.node.trajectory_tolerances import goal_tolerances, Tolerances
 from trajectory_msgs.msg import JointTrajectoryPoint
 
 
@@ -70,3 +72,29 @@ class ActiveGoal:
         feedback.error = JointTrajectoryPoint(
             positions=(desired.position[named] - actual[named]).tolist())
         return feedback
+
+
+def read_goal_message(handle: ServerGoalHandle, request: Request, joints: Sequence[str],
+                      defaults: Tolerances, now_ns: int) -> ActiveGoal:
+    """
+    Read an accepted goal's message: its points, stamp and tolerances; ``GoalError``.
+
+    ``request`` (the goal's answer on ``~/status``) gets the parsed goal and its stamp
+    (ns); ``defaults`` are the tolerance parameters; ``now_ns`` the node clock (ns), for
+    ``OLD_HEADER_TIMESTAMP``.
+    """
+    message = handle.request
+    trajectory = message.trajectory
+    stamp = trajectory.header.stamp
+    points = [(p.positions, p.velocities, p.accelerations, seconds(p.time_from_start))
+              for p in trajectory.points]
+    goal = parse_trajectory_goal(joints, trajectory.joint_names, points,
+                                 stamp.sec * 1_000_000_000 + stamp.nanosec,
+                                 len(message.multi_dof_trajectory.points))
+    tolerances = goal_tolerances(
+        defaults, joints, [(t.name, t.position) for t in message.path_tolerance],
+        [(t.name, t.position) for t in message.goal_tolerance],
+        seconds(message.goal_time_tolerance))
+    check_stamp(goal, now_ns)
+    request.request, request.stamp_ns = goal, goal.stamp_ns
+    return ActiveGoal(handle, goal, request, tolerances)
