@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import math
 
 import numpy as np
-from traj_gen_ros.core.kinematic_limits import JointError, LIMIT_TOLERANCE, limit_violation
+from traj_gen_ros.core.kinematic_limits import JointError, limit_violation
 from traj_gen_ros.core.paths import plan_path
 from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.config import Config
@@ -188,19 +188,16 @@ def slow_down(plan: Trajectory, config: Config) -> tuple[float, str]:
     Return the smallest uniform slow-down ``s >= 1`` that fits the limits, and why.
 
     ``s = max(1, v_peak/v_max, sqrt(a_peak/a_max))`` over the joints, from the exact peaks.
-    ``s = 1`` exactly when ``plan`` is within the limits as the core's ``limit_violation``
-    judges it (a peak within ``LIMIT_TOLERANCE`` of its limit fits), so a plan that is not
-    slowed needs no second check. The text names the joint and quantity that set it, e.g.
-    ``joint 'joint_1' velocity 2.06 rad/s above max_velocity 2 rad/s``.
+    ``s = 1`` exactly when the core's ``limit_violation`` passes ``plan`` (usually on its
+    Bernstein bounds alone), so a plan that is not slowed needs no second check. The text
+    names the joint and quantity that set it, e.g. ``joint 'joint_1' velocity 2.06 rad/s
+    above max_velocity 2 rad/s``.
     """
-    limits = np.vstack([config.max_velocity, config.max_acceleration])
-    if np.count_nonzero(np.vstack(plan.peak_bounds()) <= limits) == limits.size:
-        return 1.0, ''  # within even the Bernstein bounds: no peaks to find
-    velocity, acceleration = plan.peaks()
-    over = np.vstack([velocity, acceleration]) / limits
-    if np.count_nonzero(over <= 1.0 + LIMIT_TOLERANCE) == over.size:
+    if limit_violation(plan, config.max_velocity, config.max_acceleration) is None:
         return 1.0, ''
-    ratios = np.vstack([over[0], np.sqrt(over[1])])
+    velocity, acceleration = plan.peaks()
+    ratios = np.vstack([velocity / config.max_velocity,
+                        np.sqrt(acceleration / config.max_acceleration)])
     quantity, joint = divmod(int(np.argmax(ratios)), ratios.shape[1])
     factor = float(ratios[quantity, joint])
     name = config.joints[joint]
