@@ -231,10 +231,18 @@ def test_cancel_brakes_to_rest_then_canceled(session, rest):
     probe.spin_until(future.done, 10.0, 'the cancel response')
     assert len(future.result().goals_canceling) == 1
     status, code, text = result(session, handle)
+    arrived_ns = time.time_ns()  # the node's clock is the wall clock here
     assert status == GoalStatus.STATUS_CANCELED, text
     assert 'braked to rest' in text
-    assert not any(probe.latest().velocity)  # at rest when CANCELED arrives
     at_rest = probe.wait_at_rest()
+    # CANCELED is sent only after the first setpoint at rest is: that setpoint was stamped
+    # before the answer arrived (the two travel on different topics, so they may arrive in
+    # either order), and nothing stamped after the answer moves.
+    first_rest = next(s for s in probe.states
+                      if stamp_ns(s.header.stamp) > start and not any(s.velocity))
+    assert stamp_ns(first_rest.header.stamp) < arrived_ns
+    assert not any(any(s.velocity) for s in probe.states
+                   if stamp_ns(s.header.stamp) >= arrived_ns)
     assert not np.allclose(at_rest, points[-1][0])  # it did not go on to the end
     assert_continuous(probe, start)
 

@@ -300,7 +300,7 @@ class FollowJointTrajectoryServer:
 
     def _watch(self, active: ActiveGoal) -> None:
         now_ns = self._now_ns()
-        published_ns = self._stream.last_published()
+        published_ns = self._stream.last_sent()  # judged on what a client can already have
         if active.cancel is not None:
             start = active.brake_start_ns
             if start is not None and published_ns >= start and \

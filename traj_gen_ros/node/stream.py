@@ -86,6 +86,7 @@ class Stream:
         self._lock = threading.Lock()
         self._published = threading.Condition(self._lock)
         self._last_published_ns = -(2 ** 62)  # when the last setpoint was sampled
+        self._sent_ns = -(2 ** 62)  # when the last setpoint sampled is also on the wire
         self._last_tick_ns = -(2 ** 62)  # the tick (deadline) it was published for
         self._next_tick_ns = now_ns()
         self._waiting = waiting
@@ -213,6 +214,17 @@ class Stream:
         with self._lock:
             return self._last_published_ns
 
+    def last_sent(self) -> int:
+        """
+        Return when the last setpoint that is already on the wire was sampled (ns).
+
+        At most :meth:`last_published`: a setpoint is sampled under the lock and sent after
+        it. An answer judged on this one (an action goal's end) never reaches a client
+        before the setpoint it was judged on has been sent.
+        """
+        with self._lock:
+            return self._sent_ns
+
     def splice(self, start_ns: int, motion: PlannedMotion, tag: object = None) -> int | None:
         """
         Run ``motion`` from ``start_ns``; return the tick (ns) of its first setpoint.
@@ -248,7 +260,7 @@ class Stream:
         """
         with self._published:
             return self._published.wait_for(
-                lambda: self._last_published_ns >= time_ns or self.stopping.is_set(), timeout)
+                lambda: self._sent_ns >= time_ns or self.stopping.is_set(), timeout)
 
     # ------------------------------------------------------------------ stream thread
 
@@ -320,4 +332,5 @@ class Stream:
             self._forwarded = factor
             self._publish_factor(factor)
         with self._published:
+            self._sent_ns = now_ns
             self._published.notify_all()
