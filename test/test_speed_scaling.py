@@ -7,7 +7,9 @@ import pytest
 from traj_gen_ros.core.timing import min_time
 from traj_gen_ros.node.motion import held, PlannedMotion
 from traj_gen_ros.node.planning import plan_stop
+from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.schedule import Schedule
+from traj_gen_ros.node.speed_ramp import PlanWindow
 from traj_gen_ros.node.speed_scaling import (
     check_factor,
     FactorInputs,
@@ -21,10 +23,14 @@ MS = 1_000_000
 T0 = 1_000_000 * MS  # 1000 s on the node clock
 
 
+#: A plan cruising at 1 rad/s for 10⁶ s (one joint, one cubic piece: p = τ).
+CRUISE = PlanWindow(Trajectory(np.array([0.0, 1e6]), np.array([[[0.0], [1.0], [0.0], [0.0]]])))
+
+
 def cruising(time_ns, clock):
     """Give a plan's own state at 1 rad/s, no acceleration (one joint)."""
-    del time_ns, clock
-    return np.array([1.0]), np.array([0.0]), np.array([0.0])
+    del time_ns
+    return CRUISE, clock + 1.0
 
 
 @pytest.mark.parametrize('value', [-0.1, 1.5, math.nan, math.inf, 'half', True])

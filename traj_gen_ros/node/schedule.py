@@ -28,7 +28,8 @@ from __future__ import annotations
 import numpy as np
 from traj_gen_ros.core.trajectory import state_at
 from traj_gen_ros.node.motion import PlannedMotion, State
-from traj_gen_ros.node.speed_scaling import own_state, TimeMap
+from traj_gen_ros.node.speed_ramp import PlanWindow
+from traj_gen_ros.node.speed_scaling import TimeMap
 
 #: "Since forever": the start of the first motion (ns).
 BEGINNING_NS = -(2 ** 62)
@@ -41,12 +42,13 @@ class Segment:
     ``tag``: what the caller said it is for (the request), handed back if it is dropped.
     """
 
-    __slots__ = ('start', 'motion', 'clock', 'tag')
+    __slots__ = ('start', 'motion', 'clock', 'tag', 'window')
 
     def __init__(self, start: int, motion: PlannedMotion, clock: float | None,
                  tag: object = None) -> None:
         """Run ``motion`` from ``start`` (ns); ``clock`` None runs it on the node clock."""
         self.start, self.motion, self.clock, self.tag = start, motion, clock, tag
+        self.window: PlanWindow | None = None  # made when the ramp first asks
 
 
 class Schedule:
@@ -70,16 +72,17 @@ class Schedule:
         clock, factor, rate, _ = self.time_map.at(time_ns, self._own_state)
         return clock - segment.clock, factor, rate
 
-    def _own_state(self, time_ns: int, clock: float
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """Give the time map a moving scaled plan's own ``(v, a, j)`` at ``clock``."""
+    def _own_state(self, time_ns: int, clock: float) -> tuple[PlanWindow, float] | None:
+        """Give the time map the moving scaled plan (a window on it) and its own time."""
         segment = self._segment(time_ns)
         if segment.clock is None:
             return None
         elapsed = clock - segment.clock
         if elapsed >= segment.motion.plan.duration:
             return None
-        return own_state(segment.motion.plan, elapsed, self.time_map.max_jerk is not None)
+        if segment.window is None:
+            segment.window = PlanWindow(segment.motion.plan)
+        return segment.window, elapsed
 
     def setpoint(self, time_ns: int) -> State:
         """Return the commanded setpoint at ``time_ns`` (the factor applied)."""

@@ -43,6 +43,7 @@ import math
 
 import numpy as np
 from traj_gen_ros.core.trajectory import state_at, Trajectory
+from traj_gen_ros.node.speed_ramp import brake_rate, feasible, PlanWindow
 
 #: The ramp's grid (ns): ``ḟ`` (or ``f̈``) is constant on each step.
 STEP_NS = 1_000_000
@@ -57,10 +58,12 @@ EARLIEST_NS = -(2 ** 61)
 #: acceleration by at most ``SETTLED_RATE · v_max``).
 SETTLED = 1e-6
 SETTLED_RATE = 1e-3
+#: The brakes tried under a jerk limit, as fractions of the strongest (:meth:`TimeMap._curvature`).
+CANDIDATES = 4.0 ** -np.arange(6)
 
-#: The plan's own ``(velocity, acceleration, jerk)`` at the plan time ``P`` (s) of node
-#: time ``t`` (ns), or None where nothing scaled moves.
-PlanState = Callable[[int, float], tuple[np.ndarray, np.ndarray, np.ndarray] | None]
+#: The scaled plan in effect at node time ``t`` (ns), as a :class:`PlanWindow`, and its
+#: own time ``τ`` (s) at the plan clock ``P`` (s); None where nothing scaled moves.
+PlanState = Callable[[int, float], tuple[PlanWindow, float] | None]
 
 
 def check_factor(value: object, name: str = 'speed_scaling') -> float:
@@ -197,6 +200,10 @@ class Knot:
     factor: float
     rate: float = 0.0
     curvature: float = 0.0
+    #: Under a jerk limit, ``K`` (1/s²) of the brake verified from this knot's state
+    #: (:func:`~traj_gen_ros.node.speed_ramp.feasible`), and of the one from the next.
+    brake: float = 0.0
+    next_brake: float = 0.0
 
     def at(self, time_ns: int) -> tuple[float, float, float, float]:
         """``(P, f, ḟ, f̈)`` at ``time_ns`` within the step after this knot (exact)."""
@@ -305,7 +312,8 @@ class TimeMap:
             slow = self.max_jerk is None or abs(rate) <= SETTLED_RATE
             if slow and abs(self.target - factor) <= SETTLED:
                 factor, rate = self.target, 0.0
-            knot = Knot(knot.time_ns + self.step_ns, clock, factor, rate)
+            knot = Knot(knot.time_ns + self.step_ns, clock, factor, rate,
+                        brake=knot.next_brake)
             knot = self._decide(knot, plan_state)
             self._ahead.append(knot)
         return knot
@@ -316,32 +324,62 @@ class TimeMap:
         error = self.target - knot.factor
         if error == 0.0 and knot.rate == 0.0:
             return Knot(knot.time_ns, knot.clock, knot.factor)
-        state = plan_state(knot.time_ns, knot.clock)
-        if self.max_jerk is None or state is None:
-            low, high = (-math.inf, math.inf) if state is None else rate_bounds(
-                knot.factor, state[0], state[1], self.max_acceleration)
+        found = plan_state(knot.time_ns, knot.clock)
+        if found is not None:
+            window, tau = found
+            velocity, acceleration, jerk = window.state(tau)
+        if self.max_jerk is None or found is None:
+            low, high = (-math.inf, math.inf) if found is None else rate_bounds(
+                knot.factor, velocity, acceleration, self.max_acceleration)
             return Knot(knot.time_ns, knot.clock, knot.factor, min(max(error / h, low), high))
-        return Knot(knot.time_ns, knot.clock, knot.factor, knot.rate,
-                    self._curvature(knot, state, error, h))
+        curvature, brake = self._curvature(knot, window, tau, (velocity, acceleration, jerk),
+                                           error, h)
+        return Knot(knot.time_ns, knot.clock, knot.factor, knot.rate, curvature,
+                    knot.brake, brake)
 
-    def _curvature(self, knot: Knot, state: tuple[np.ndarray, np.ndarray, np.ndarray],
-                   error: float, h: float) -> float:
+    def _curvature(self, knot: Knot, window: PlanWindow, tau: float,
+                   state: tuple[np.ndarray, np.ndarray, np.ndarray], error: float, h: float
+                   ) -> tuple[float, float]:
         """
-        ``f̈`` on the step after ``knot`` under a jerk limit: toward the slope that reaches ``f*``.
+        ``(f̈, K)`` on the step after ``knot`` under a jerk limit, and the brake verified after it.
 
-        The slope asked for is the braking curve ``sign(e) √(2 K |e|)`` (``K`` the ``f̈``
-        available, from the jerk interval), capped to reach ``f*`` in one step and kept
-        inside the acceleration interval; ``f̈`` moves ``ḟ`` toward it within the jerk
-        interval.
+        Candidates for ``K`` are ``K₀ 4⁻ⁱ`` (``K₀ = σ min j_max / |v|`` over the moving
+        joints): each asks for the slope ``ḟ`` whose grid brake at ``K`` ends at ``f*``
+        (:func:`~traj_gen_ros.node.speed_ramp.brake_rate`), kept in the acceleration
+        interval, and moves ``ḟ`` toward it within ``±K`` and the jerk interval. The first
+        whose step and brake keep the limits all along (first of all the landing: this step
+        and one more to rest at ``f*`` exactly)
+        (:func:`~traj_gen_ros.node.speed_ramp.feasible`) is taken; if none, the brake
+        verified from ``knot`` (``f̈ = -sign(ḟ) min(K, |ḟ|/h)``; at ``ḟ = 0``: ``f̈ = 0``).
         """
         velocity, acceleration, jerk = state
-        low, high = rate_bounds(knot.factor, velocity, acceleration, self.max_acceleration)
-        c_low, c_high = jerk_bounds(knot.factor, knot.rate, velocity, acceleration, jerk,
-                                    self.max_jerk)
-        available = min(-c_low, c_high)
-        if not math.isfinite(available) or available <= 0.0:
-            available = 1.0 / (h * h)  # nothing bounds it (no joint moves)
-        wanted = math.copysign(min(math.sqrt(2.0 * available * abs(error)), abs(error) / h),
-                               error)
-        wanted = min(max(wanted, low), high)
-        return min(max((wanted - knot.rate) / h, c_low), c_high)
+        f, rate = knot.factor, knot.rate
+        low, high = rate_bounds(f, velocity, acceleration, self.max_acceleration)
+        c_low, c_high = jerk_bounds(f, rate, velocity, acceleration, jerk, self.max_jerk)
+        moving = np.abs(velocity) > RESTING
+        strongest = (MARGIN * float(np.min(self.max_jerk[moving] / np.abs(velocity[moving])))
+                     if moving.any() else 1.0 / (h * h))
+        brakes = strongest * CANDIDATES
+        curvatures = np.empty_like(brakes)
+        for index, brake in enumerate(brakes):
+            wanted = rate
+            for _ in range(2):  # the error after the step, f moving at (ḟ + wanted) / 2
+                left = error - h * (rate + wanted) / 2.0
+                wanted = math.copysign(brake_rate(abs(left), brake, h), left)
+            wanted = min(max(wanted, low), high)
+            curvatures[index] = min(max((wanted - rate) / h, c_low, -brake), c_high, brake)
+        if not window.cubic:  # no exact ranges: the first, checked at its start only
+            return float(curvatures[0]), float(brakes[0])
+        # The landing: this step and one to rest end exactly at f* (ḟ = 0).
+        landing = (error - 1.5 * rate * h) / (h * h)
+        curvatures = np.concatenate([[landing], curvatures])
+        brakes = np.concatenate([[max(abs(rate + landing * h) / h, strongest)], brakes])
+        ok = feasible(window, tau, f, rate, curvatures, brakes, h, self.max_acceleration,
+                      self.max_jerk)
+        if ok.any():
+            index = int(np.argmax(ok))
+            return float(curvatures[index]), float(brakes[index])
+        if rate == 0.0:
+            return 0.0, 0.0
+        brake = knot.brake if knot.brake > 0.0 else strongest
+        return -math.copysign(min(brake, abs(rate) / h), rate), brake
