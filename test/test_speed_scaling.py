@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 from traj_gen_ros.core.timing import min_time
+from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.motion import held, PlannedMotion
 from traj_gen_ros.node.planning import plan_stop
-from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.schedule import Schedule
 from traj_gen_ros.node.speed_ramp import PlanWindow
 from traj_gen_ros.node.speed_scaling import (

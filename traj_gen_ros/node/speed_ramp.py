@@ -1,6 +1,8 @@
 """
-The speed override's look-ahead under a jerk limit: exact bounds of a plan over plan-time
-intervals, and the check that a ramp step can always be followed by a brake of ``ḟ``.
+The speed override's look-ahead under a jerk limit: a plan's exact ranges, the brake check.
+
+Exact bounds of a plan over plan-time intervals, and the check that a ramp step can
+always be followed by a brake of ``ḟ``.
 
 The ramp (:class:`traj_gen_ros.node.speed_scaling.TimeMap`) commands, from a plan's own
 ``v(τ)``, ``a(τ)``, ``j(τ)`` at ``dτ/dt = f``, the acceleration ``f² a + ḟ v`` and jerk
@@ -139,7 +141,7 @@ def brake_rate(distance: float, brake: float, step: float) -> float:
 
 def _product(xl: np.ndarray, xh: np.ndarray, yl: np.ndarray, yh: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray]:
-    """The range of ``x y`` for ``x`` in ``[xl, xh]`` and ``y`` in ``[yl, yh]``."""
+    """Return the range of ``x y`` for ``x`` in ``[xl, xh]`` and ``y`` in ``[yl, yh]``."""
     products = (xl * yl, xl * yh, xh * yl, xh * yh)
     return np.minimum.reduce(products), np.maximum.reduce(products)
 
