@@ -9,11 +9,10 @@ from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.motion import held, PlannedMotion
 from traj_gen_ros.node.planning import plan_stop
 from traj_gen_ros.node.schedule import Schedule
-from traj_gen_ros.node.speed_ramp import PlanWindow
+from traj_gen_ros.node.speed_ramp import jerk_at, PlanWindow
 from traj_gen_ros.node.speed_scaling import (
     check_factor,
     FactorInputs,
-    jerk_at,
     MARGIN,
     rate_bounds,
     TimeMap,

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from traj_gen_ros.core.timing import min_time
 from traj_gen_ros.core.trajectory import state_at
-from traj_gen_ros.node.speed_ramp import PlanWindow
-from traj_gen_ros.node.speed_scaling import jerk_at, TimeMap
+from traj_gen_ros.node.speed_ramp import jerk_at, PlanWindow
+from traj_gen_ros.node.speed_scaling import TimeMap
 
 MS = 1_000_000
 T0 = 1_000_000 * MS  # 1000 s on the node clock

@@ -10,7 +10,7 @@ The ramp (:class:`traj_gen_ros.node.speed_scaling.TimeMap`) commands, from a pla
 ``|f² a| <= |a|``, ``|f³ j| <= |j|`` (``0 <= f <= 1``). So a step ``f̈ = c`` is taken only
 if, after it, the *brake* ``f̈ = -sign(ḟ) min(K, |ḟ|/h)`` (``h`` the step) brings ``ḟ`` to
 0 with every joint within ``max_acceleration`` and ``max_jerk`` all along, ``f`` within
-``[0, 1]`` (:func:`feasible`). That brake is then a verified continuation: if no new step
+``[0, 1]`` (:func:`first_feasible`). That brake is then a verified continuation: if no new step
 passes the next time, the ramp follows it (its tail is the same brake), so the limits
 hold at every instant by induction, however the factor asked for changes and whatever
 the plan's own jerk phases do ahead (they are looked at up to where ``ḟ`` is 0 again).
@@ -28,6 +28,8 @@ No ROS here. Units: rad (or m), rad/s, rad/s², rad/s³, s.
 
 from __future__ import annotations
 
+from bisect import bisect_left, bisect_right
+from collections.abc import Iterable
 import math
 
 import numpy as np
@@ -39,6 +41,27 @@ CHUNKS = 24
 SLACK = 1e-9
 #: A brake longer than this many steps is not taken (the check would be too coarse).
 LONGEST_BRAKE = 100_000
+
+
+def jerk_at(plan: Trajectory, time: float) -> np.ndarray:
+    """Return the plan's own jerk (rad/s³) at ``time`` (s, clipped to the plan), ``(joints,)``."""
+    time = min(max(float(time), 0.0), plan.duration)
+    coefficients = plan.coefficients
+    size = coefficients.shape[1]
+    if size < 4:
+        return np.zeros(plan.joint_count)
+    breakpoints = plan.breakpoints
+    joints = np.arange(plan.joint_count)
+    if breakpoints.ndim == 1:
+        piece = np.full(plan.joint_count, np.searchsorted(breakpoints[1:-1], time, side='right'))
+        local = time - breakpoints[piece]
+    else:
+        piece = np.count_nonzero(breakpoints[1:-1] <= time, axis=0)
+        local = time - breakpoints[piece, joints]
+    powers = np.arange(3, size)
+    factors = powers * (powers - 1) * (powers - 2)
+    gathered = coefficients[piece, 3:, joints]  # (joints, size - 3)
+    return np.sum(gathered * factors * local[:, None] ** (powers - 3), axis=1)
 
 
 class PlanWindow:
@@ -75,13 +98,17 @@ class PlanWindow:
         self._point_v = np.concatenate(
             [c1[1:], c1 + root * (2.0 * c2 + 3.0 * c3 * root)])
         self._point_a = np.concatenate([2.0 * c2[1:], np.zeros_like(c1)])
+        # The same pieces as Python floats, per joint, for one interval at a time.
+        self._starts = breakpoints[:-1].T.tolist()  # (joints, pieces)
+        columns = (breakpoints[:-1].T, breakpoints[1:].T, c1.T, c2.T, c3.T)  # (joints, pieces)
+        self._pieces = [list(zip(*(column[j].tolist() for column in columns), strict=True))
+                        for j in range(joints)]
 
     def state(self, tau: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return the plan's own ``(v, a, j)`` at ``tau`` (s, clipped to the plan)."""
         if self.cubic:
             v, a, j = self._evaluate(np.array([min(max(float(tau), 0.0), self.duration)]))
             return v[0], a[0], j[0]
-        from traj_gen_ros.node.speed_scaling import jerk_at  # the general degree
         _, velocity, acceleration = state_at(self.plan, tau)
         return velocity, acceleration, jerk_at(self.plan, tau)
 
@@ -123,6 +150,43 @@ class PlanWindow:
         return result
 
 
+    def joint_ranges(self, start: float, end: float) -> list[tuple[float, ...]]:
+        """
+        Return per joint ``(v_min, v_max, a_min, a_max, j_min, j_max)`` over ``[start, end]``.
+
+        As :meth:`ranges` for one interval (s, ``start <= end``), in plain floats: the
+        pieces it overlaps (bisection), their ends, the breakpoints and the roots of ``a``
+        inside. Past the plan's end nothing moves: 0 is in every range there.
+        """
+        low = min(max(start, 0.0), self.duration)
+        high = min(max(end, 0.0), self.duration)
+        past = end > self.duration
+        result = []
+        for starts, pieces in zip(self._starts, self._pieces, strict=True):
+            first = max(bisect_right(starts, low) - 1, 0)
+            last = max(bisect_left(starts, high) - 1, first)
+            v_lo = a_lo = j_lo = math.inf
+            v_hi = a_hi = j_hi = -math.inf
+            for piece_start, piece_end, c1, c2, c3 in pieces[first:last + 1]:
+                u0 = max(low, piece_start) - piece_start
+                u1 = min(high, piece_end) - piece_start
+                v0, v1 = c1 + u0 * (2.0 * c2 + 3.0 * c3 * u0), c1 + u1 * (2.0 * c2 + 3.0 * c3 * u1)
+                a0, a1 = 2.0 * c2 + 6.0 * c3 * u0, 2.0 * c2 + 6.0 * c3 * u1
+                v_lo, v_hi = min(v_lo, v0, v1), max(v_hi, v0, v1)
+                a_lo, a_hi = min(a_lo, a0, a1), max(a_hi, a0, a1)
+                j_lo, j_hi = min(j_lo, 6.0 * c3), max(j_hi, 6.0 * c3)
+                if c3 != 0.0:
+                    root = -c2 / (3.0 * c3)  # a = 0: v's extremum
+                    if u0 < root < u1:
+                        peak = c1 + root * (2.0 * c2 + 3.0 * c3 * root)
+                        v_lo, v_hi = min(v_lo, peak), max(v_hi, peak)
+            if past:
+                v_lo, a_lo, j_lo = min(v_lo, 0.0), min(a_lo, 0.0), min(j_lo, 0.0)
+                v_hi, a_hi, j_hi = max(v_hi, 0.0), max(a_hi, 0.0), max(j_hi, 0.0)
+            result.append((v_lo, v_hi, a_lo, a_hi, j_lo, j_hi))
+        return result
+
+
 def brake_rate(distance: float, brake: float, step: float) -> float:
     """
     Return the largest ``|ḟ|`` (1/s) the grid brake ``min(K, |ḟ|/h)`` stops within ``distance``.
@@ -142,61 +206,66 @@ def brake_rate(distance: float, brake: float, step: float) -> float:
 def _product(xl: np.ndarray, xh: np.ndarray, yl: np.ndarray, yh: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray]:
     """Return the range of ``x y`` for ``x`` in ``[xl, xh]`` and ``y`` in ``[yl, yh]``."""
-    products = (xl * yl, xl * yh, xh * yl, xh * yh)
-    return np.minimum.reduce(products), np.maximum.reduce(products)
+    a, b, c, d = xl * yl, xl * yh, xh * yl, xh * yh
+    return np.minimum(np.minimum(a, b), np.minimum(c, d)), \
+        np.maximum(np.maximum(a, b), np.maximum(c, d))
 
 
-def feasible(window: PlanWindow, tau: float, factor: float, rate: float,
-             curvature: np.ndarray, brake: np.ndarray, step: float,
-             max_acceleration: np.ndarray, max_jerk: np.ndarray) -> np.ndarray:
+def _rows(tau: float, factor: float, rate: float, c: np.ndarray, k: np.ndarray, h: float
+          ) -> tuple[np.ndarray, np.ndarray]:
     """
-    Tell, per candidate, whether the step ``f̈ = curvature`` then the brake ``K`` keep the limits.
+    Return the ranges on each chunk of the step and brake, and which candidates have one.
 
-    From ``(f, ḟ) = (factor, rate)`` at the plan's own time ``tau`` (s): one step of
-    ``step`` s at ``f̈ = c`` (1/s²), then ``f̈ = -sign(ḟ) min(K, |ḟ|/h)`` until ``ḟ = 0``.
-    Every joint's ``|f² a + ḟ v| <= max_acceleration`` and ``|f³ j + 3 f ḟ a + f̈ v| <=
-    max_jerk`` over the whole of it (interval bounds on chunks) and ``0 <= f <= 1``.
-    ``curvature`` and ``brake`` ``(q,)``; returns ``(q,)`` booleans.
+    ``(q, chunks, 8)``: ``f``, ``ḟ``, ``f̈`` and ``τ`` as (low, high) pairs, columns
+    ``f_lo, f_hi, ḟ_lo, ḟ_hi, f̈_lo, f̈_hi, τ_a, τ_b`` (lows even, highs odd). Chunk 0 is
+    the step at ``f̈ = c``, then :data:`CHUNKS` chunks of whole steps at ``-sign(ḟ) K``,
+    then the one step to rest. On each, ``f̈`` is constant, ``ḟ`` linear, ``f`` quadratic
+    (monotone, but for the step where ``ḟ`` turns: its vertex), ``τ`` increasing.
     """
-    h = step
-    c = np.asarray(curvature, dtype=float)
-    k = np.asarray(brake, dtype=float)
-    # The step: f quadratic (its vertex where ḟ changes sign), ḟ linear.
     r1 = rate + c * h
     f1 = factor + rate * h + c * h * h / 2.0
     t1 = tau + factor * h + rate * h * h / 2.0 + c * h ** 3 / 6.0
-    with np.errstate(divide='ignore', invalid='ignore'):
-        vertex = factor - rate * rate / (2.0 * c)
-    turns = (rate * r1 < 0.0)
-    rows = [(np.minimum.reduce([np.full_like(c, factor), f1, np.where(turns, vertex, f1)]),
-             np.maximum.reduce([np.full_like(c, factor), f1, np.where(turns, vertex, f1)]),
-             np.minimum(rate, r1), np.maximum(rate, r1), c, c, np.full_like(c, tau), t1)]
-    # The brake: whole steps at -sign(ḟ) K on CHUNKS chunks, then one step to rest.
-    sign = np.sign(r1)
-    with np.errstate(divide='ignore', invalid='ignore'):
+    with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
+        vertex = np.where(rate * r1 < 0.0, factor - rate * rate / (2.0 * c), f1)
         whole = np.floor(np.abs(r1) / (k * h))
     good = (r1 == 0.0) | (np.isfinite(whole) & (whole <= LONGEST_BRAKE) & (k > 0.0))
     whole = np.where(good, whole, 0.0)
-    times = np.linspace(0.0, 1.0, CHUNKS + 1)[None, :] * (np.round(whole)[:, None] * h)
-    times = np.round(times / h) * h  # on the grid
-    ks = (sign * k)[:, None]
+    times = np.round(np.linspace(0.0, 1.0, CHUNKS + 1)[None, :] * whole[:, None]) * h
+    ks = (np.sign(r1) * k)[:, None]
     fs = f1[:, None] + r1[:, None] * times - ks * times ** 2 / 2.0
     rs = r1[:, None] - ks * times
     ts = t1[:, None] + f1[:, None] * times + r1[:, None] * times ** 2 / 2.0 - \
         ks * times ** 3 / 6.0
-    rows.append((np.minimum(fs[:, :-1], fs[:, 1:]), np.maximum(fs[:, :-1], fs[:, 1:]),
-                 np.minimum(rs[:, :-1], rs[:, 1:]), np.maximum(rs[:, :-1], rs[:, 1:]),
-                 np.broadcast_to(-ks, rs[:, 1:].shape), np.broadcast_to(-ks, rs[:, 1:].shape),
-                 ts[:, :-1], ts[:, 1:]))
     fm, rm, tm = fs[:, -1], rs[:, -1], ts[:, -1]
     fe, te = fm + rm * h / 2.0, tm + fm * h + rm * h * h / 3.0
-    rows.append((np.minimum(fm, fe), np.maximum(fm, fe), np.minimum(rm, 0.0),
-                 np.maximum(rm, 0.0), -rm / h, -rm / h, tm, te))
-    fl, fh, rl, rh, cl, ch, ta, tb = (np.concatenate([np.reshape(row[i], (c.size, -1))
-                                                      for row in rows], axis=1).ravel()
-                                      for i in range(8))
-    vl, vh, al, ah, jl, jh = window.ranges(ta, np.maximum(ta, tb))
-    fl, fh, rl, rh, cl, ch = (x[:, None] for x in (fl, fh, rl, rh, cl, ch))
+    rows = np.empty((c.size, CHUNKS + 2, 8))
+    rows[:, 0] = np.stack([np.minimum(np.minimum(factor, f1), vertex),
+                           np.maximum(np.maximum(factor, f1), vertex),
+                           np.minimum(rate, r1), np.maximum(rate, r1), c, c,
+                           np.full_like(c, tau), t1], axis=1)
+    chunk = rows[:, 1:-1]
+    chunk[..., 0], chunk[..., 1] = np.minimum(fs[:, :-1], fs[:, 1:]), \
+        np.maximum(fs[:, :-1], fs[:, 1:])
+    chunk[..., 2], chunk[..., 3] = np.minimum(rs[:, :-1], rs[:, 1:]), \
+        np.maximum(rs[:, :-1], rs[:, 1:])
+    chunk[..., 4] = chunk[..., 5] = -ks
+    chunk[..., 6], chunk[..., 7] = ts[:, :-1], ts[:, 1:]
+    rows[:, -1] = np.stack([np.minimum(fm, fe), np.maximum(fm, fe), np.minimum(rm, 0.0),
+                            np.maximum(rm, 0.0), -rm / h, -rm / h, tm, te], axis=1)
+    return rows, good
+
+
+def _within(window: PlanWindow, rows: np.ndarray, max_acceleration: np.ndarray,
+            max_jerk: np.ndarray) -> np.ndarray:
+    """
+    Tell, per row of ranges ``(m, 8)`` (as :func:`_rows`), whether it provably keeps the limits.
+
+    Bounds ``|f² a + ḟ v|`` and ``|f³ j + 3 f ḟ a + f̈ v|`` from above by products of
+    ranges, with ``v, a, j`` the plan's exact ranges over ``[τ_a, τ_b]``; and ``f`` within
+    ``[0, 1]``. ``(m,)`` booleans.
+    """
+    fl, fh, rl, rh, cl, ch, ta, tb = (rows[:, i, None] for i in range(8))
+    vl, vh, al, ah, jl, jh = window.ranges(ta[:, 0], np.maximum(ta, tb)[:, 0])
     f0 = np.maximum(fl, 0.0)
     lo1, hi1 = _product(f0 * f0, fh * fh, al, ah)
     lo2, hi2 = _product(rl, rh, vl, vh)
@@ -206,7 +275,114 @@ def feasible(window: PlanWindow, tau: float, factor: float, rate: float,
     lo4, hi4 = _product(3.0 * frl, 3.0 * frh, al, ah)
     lo5, hi5 = _product(cl, ch, vl, vh)
     jerk = np.maximum(np.abs(lo3 + lo4 + lo5), np.abs(hi3 + hi4 + hi5))
-    ok = (np.all(acceleration <= max_acceleration * (1.0 + SLACK), axis=1)
-          & np.all(jerk <= max_jerk * (1.0 + SLACK), axis=1)
-          & (fl[:, 0] >= -SLACK) & (fh[:, 0] <= 1.0 + SLACK))
-    return ok.reshape(c.size, -1).all(axis=1) & good
+    return (np.all(acceleration <= max_acceleration * (1.0 + SLACK), axis=1)
+            & np.all(jerk <= max_jerk * (1.0 + SLACK), axis=1)
+            & (fl[:, 0] >= -SLACK) & (fh[:, 0] <= 1.0 + SLACK))
+
+
+def _span(xl: float, xh: float, yl: float, yh: float) -> tuple[float, float]:
+    """Return the range of ``x y`` for ``x`` in ``[xl, xh]`` and ``y`` in ``[yl, yh]``."""
+    a, b, c, d = xl * yl, xl * yh, xh * yl, xh * yh
+    return min(a, b, c, d), max(a, b, c, d)
+
+
+def envelope(tau: float, factor: float, rate: float, c: float, k: float, h: float
+             ) -> tuple[float, ...] | None:
+    """
+    Return the ranges of ``f``, ``ḟ``, ``f̈`` and ``τ`` over a whole step and brake.
+
+    As one row of :func:`_rows` spanning all of its chunks, in closed form: the step
+    (``f`` quadratic, its vertex where ``ḟ`` turns), then the brake, over which ``ḟ``
+    keeps its sign and goes to 0 (so ``f`` is monotone). None if the brake is too long
+    or has no strength.
+    """
+    r1 = rate + c * h
+    f1 = factor + rate * h + c * h * h / 2.0
+    t1 = tau + factor * h + rate * h * h / 2.0 + c * h ** 3 / 6.0
+    f_lo, f_hi = min(factor, f1), max(factor, f1)
+    if rate * r1 < 0.0:
+        vertex = factor - rate * rate / (2.0 * c)
+        f_lo, f_hi = min(f_lo, vertex), max(f_hi, vertex)
+    c_lo = c_hi = c
+    fm, rm, tm = f1, r1, t1
+    if r1 != 0.0:
+        if not k > 0.0:
+            return None
+        whole = math.floor(abs(r1) / (k * h))
+        if whole > LONGEST_BRAKE:
+            return None
+        if whole:
+            kick, span = math.copysign(k, r1), whole * h
+            fm = f1 + r1 * span - kick * span * span / 2.0
+            rm = r1 - kick * span
+            tm = t1 + f1 * span + r1 * span * span / 2.0 - kick * span ** 3 / 6.0
+            c_lo, c_hi = min(c_lo, -kick), max(c_hi, -kick)
+        c_lo, c_hi = min(c_lo, -rm / h), max(c_hi, -rm / h)
+    fe, te = fm + rm * h / 2.0, tm + fm * h + rm * h * h / 3.0
+    return (min(f_lo, fe), max(f_hi, fe), min(rate, r1, 0.0), max(rate, r1, 0.0),
+            c_lo, c_hi, tau, te)
+
+
+def keeps_limits(window: PlanWindow, row: tuple[float, ...], max_acceleration: list[float],
+                 max_jerk: list[float]) -> bool:
+    """
+    Tell whether one row of ranges (as :func:`envelope`) provably keeps the limits.
+
+    :func:`_within` for one row, in plain floats: stops at the first joint that fails.
+    """
+    fl, fh, rl, rh, cl, ch, ta, tb = row
+    if fl < -SLACK or fh > 1.0 + SLACK:
+        return False
+    f0 = max(fl, 0.0)
+    f2 = (f0 * f0, fh * fh)
+    f3 = (f0 ** 3, fh ** 3)
+    frl, frh = _span(f0, fh, rl, rh)
+    for (vl, vh, al, ah, jl, jh), a_max, j_max in zip(
+            window.joint_ranges(ta, max(ta, tb)), max_acceleration, max_jerk, strict=True):
+        lo1, hi1 = _span(*f2, al, ah)
+        lo2, hi2 = _span(rl, rh, vl, vh)
+        if max(abs(lo1 + lo2), abs(hi1 + hi2)) > a_max * (1.0 + SLACK):
+            return False
+        lo3, hi3 = _span(*f3, jl, jh)
+        lo4, hi4 = _span(3.0 * frl, 3.0 * frh, al, ah)
+        lo5, hi5 = _span(cl, ch, vl, vh)
+        if max(abs(lo3 + lo4 + lo5), abs(hi3 + hi4 + hi5)) > j_max * (1.0 + SLACK):
+            return False
+    return True
+
+
+def first_feasible(window: PlanWindow, tau: float, factor: float, rate: float,
+                   candidates: Iterable[tuple[float, float, bool]], step: float,
+                   max_acceleration: np.ndarray, max_jerk: np.ndarray, chunked: bool = True
+                   ) -> tuple[float, float] | None:
+    """
+    Return the first candidate ``(f̈, K)`` whose step then brake provably keep the limits.
+
+    From ``(f, ḟ) = (factor, rate)`` at the plan's own time ``tau`` (s): one step of
+    ``step`` s at ``f̈ = c`` (1/s²), then ``f̈ = -sign(ḟ) min(K, |ḟ|/h)`` until ``ḟ = 0``.
+    Every joint's ``|f² a + ḟ v| <= max_acceleration`` and ``|f³ j + 3 f ḟ a + f̈ v| <=
+    max_jerk`` over the whole of it, and ``0 <= f <= 1``. Candidates ``(c, K, _)`` in
+    order of preference (an iterator: made only as far as asked); the first ``(c, K)``
+    that provably does, or None.
+
+    Each candidate is first bounded as one range over its whole step and brake (cheap;
+    when it passes, so do all its chunks). The first that this does not pass is then
+    checked chunk by chunk (:data:`CHUNKS`: finer, and dearer); at most one per call, so
+    a call costs at most one chunked check (a later candidate it might have passed is
+    not taken: the ramp is slower there, never outside the limits). ``chunked`` False:
+    none at all.
+    """
+    accelerations, jerks = max_acceleration.tolist(), max_jerk.tolist()
+    chunked = not chunked
+    for c, k, _ in candidates:
+        row = envelope(tau, factor, rate, c, k, step)
+        if row is None:
+            continue
+        if keeps_limits(window, row, accelerations, jerks):
+            return c, k
+        if not chunked:
+            chunked = True
+            rows, good = _rows(tau, factor, rate, np.array([c]), np.array([k]), step)
+            if good[0] and _within(window, rows[0], max_acceleration, max_jerk).all():
+                return c, k
+    return None

@@ -37,13 +37,12 @@ No ROS here. Units: rad (or m), rad/s, rad/s², rad/s³, s; ns where named.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, replace
 import math
 
 import numpy as np
-from traj_gen_ros.core.trajectory import state_at, Trajectory
-from traj_gen_ros.node.speed_ramp import brake_rate, feasible, PlanWindow
+from traj_gen_ros.node.speed_ramp import brake_rate, first_feasible, PlanWindow
 
 #: The ramp's grid (ns): ``ḟ`` (or ``f̈``) is constant on each step.
 STEP_NS = 1_000_000
@@ -57,9 +56,14 @@ EARLIEST_NS = -(2 ** 61)
 #: within ``SETTLED_RATE`` 1/s: a step of ``ḟ`` that small changes the commanded
 #: acceleration by at most ``SETTLED_RATE · v_max``).
 SETTLED = 1e-6
-SETTLED_RATE = 1e-3
+SETTLED_RATE = 1e-5
 #: The brakes tried under a jerk limit, as fractions of the strongest (:meth:`TimeMap._curvature`).
 CANDIDATES = 4.0 ** -np.arange(6)
+#: Under a jerk limit, at rest (``ḟ = 0``) the chunked check is tried every this many steps.
+RETRY = 4
+#: ``|ḟ|`` this close (relative) to the verified brake's curve to ``f*`` counts as on it:
+#: the brake is followed, and stops short of ``f*`` by about this times its distance.
+ON_CURVE = 1e-3
 
 #: The scaled plan in effect at node time ``t`` (ns), as a :class:`PlanWindow`, and its
 #: own time ``τ`` (s) at the plan clock ``P`` (s); None where nothing scaled moves.
@@ -112,35 +116,6 @@ class FactorInputs:
         if self.last_ignored:
             values.append(('last speed_scaling_input ignored', self.last_ignored))
         return values
-
-
-def jerk_at(plan: Trajectory, time: float) -> np.ndarray:
-    """Return the plan's own jerk (rad/s³) at ``time`` (s, clipped to the plan), ``(joints,)``."""
-    time = min(max(float(time), 0.0), plan.duration)
-    coefficients = plan.coefficients
-    size = coefficients.shape[1]
-    if size < 4:
-        return np.zeros(plan.joint_count)
-    breakpoints = plan.breakpoints
-    joints = np.arange(plan.joint_count)
-    if breakpoints.ndim == 1:
-        piece = np.full(plan.joint_count, np.searchsorted(breakpoints[1:-1], time, side='right'))
-        local = time - breakpoints[piece]
-    else:
-        piece = np.count_nonzero(breakpoints[1:-1] <= time, axis=0)
-        local = time - breakpoints[piece, joints]
-    powers = np.arange(3, size)
-    factors = powers * (powers - 1) * (powers - 2)
-    gathered = coefficients[piece, 3:, joints]  # (joints, size - 3)
-    return np.sum(gathered * factors * local[:, None] ** (powers - 3), axis=1)
-
-
-def own_state(plan: Trajectory, time: float, jerk: bool
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Return the plan's own ``(v, a, j)`` at ``time`` (s); ``j`` zeros unless ``jerk``."""
-    _, velocity, acceleration = state_at(plan, time)
-    return velocity, acceleration, (jerk_at(plan, time) if jerk
-                                    else np.zeros_like(velocity))
 
 
 def _interval(base: np.ndarray, bound: np.ndarray, velocity: np.ndarray
@@ -201,7 +176,7 @@ class Knot:
     rate: float = 0.0
     curvature: float = 0.0
     #: Under a jerk limit, ``K`` (1/s²) of the brake verified from this knot's state
-    #: (:func:`~traj_gen_ros.node.speed_ramp.feasible`), and of the one from the next.
+    #: (:func:`~traj_gen_ros.node.speed_ramp.first_feasible`), and of the one from the next.
     brake: float = 0.0
     next_brake: float = 0.0
 
@@ -257,8 +232,15 @@ class TimeMap:
         self.forget()
 
     def forget(self) -> None:
-        """Drop the knots computed ahead of the committed one (the plans changed)."""
+        """
+        Drop the knots computed ahead of the committed one (the plans changed).
+
+        The brake verified from the next knot was verified against the old plans: it is
+        no longer taken for verified (the next step's candidates are checked afresh).
+        """
         self._ahead.clear()
+        if self._base is not None and self._base.next_brake:
+            self._base = replace(self._base, next_brake=0.0)
 
     def set_target(self, factor: float, from_ns: int, plan_state: PlanState) -> None:
         """Ramp toward ``factor`` (in [0, 1]) from the first grid time at or after ``from_ns``."""
@@ -349,37 +331,57 @@ class TimeMap:
         interval, and moves ``ḟ`` toward it within ``±K`` and the jerk interval. The first
         whose step and brake keep the limits all along (first of all the landing: this step
         and one more to rest at ``f*`` exactly)
-        (:func:`~traj_gen_ros.node.speed_ramp.feasible`) is taken; if none, the brake
+        (:func:`~traj_gen_ros.node.speed_ramp.first_feasible`) is taken; if none, the brake
         verified from ``knot`` (``f̈ = -sign(ḟ) min(K, |ḟ|/h)``; at ``ḟ = 0``: ``f̈ = 0``).
         """
         velocity, acceleration, jerk = state
         f, rate = knot.factor, knot.rate
-        low, high = rate_bounds(f, velocity, acceleration, self.max_acceleration)
-        c_low, c_high = jerk_bounds(f, rate, velocity, acceleration, jerk, self.max_jerk)
+        if knot.brake > 0.0 and rate * error > 0.0 and abs(rate) > 2.0 * knot.brake * h and \
+                abs(rate) >= (1.0 - ON_CURVE) * brake_rate(abs(error), knot.brake, h):
+            # On (or past) the verified brake's curve to f*: follow it (its tail is
+            # verified, no check needed); a stronger brake might land a little sooner.
+            # Its last two steps are chosen afresh: the landing puts f on f* at rest.
+            return -math.copysign(min(knot.brake, abs(rate) / h), rate), knot.brake
         moving = np.abs(velocity) > RESTING
         strongest = (MARGIN * float(np.min(self.max_jerk[moving] / np.abs(velocity[moving])))
                      if moving.any() else 1.0 / (h * h))
-        brakes = strongest * CANDIDATES
-        curvatures = np.empty_like(brakes)
-        for index, brake in enumerate(brakes):
+        candidates = self._candidates(knot, state, error, h, strongest)
+        if not window.cubic:  # no exact ranges: the first, checked at its start only
+            return next(c for c in candidates if c[2])[:2]
+        # Waiting at ḟ = 0 is safe for ever: then the dearer chunked check is made only on
+        # every RETRY-th step (a ramp starts at most RETRY - 1 steps later for it).
+        retry = rate != 0.0 or (knot.time_ns // self.step_ns) % RETRY == 0
+        chosen = first_feasible(window, tau, f, rate, candidates, h, self.max_acceleration,
+                                self.max_jerk, retry)
+        if chosen is not None:
+            return chosen
+        if rate == 0.0:
+            return 0.0, 0.0
+        brake = knot.brake if knot.brake > 0.0 else strongest
+        return -math.copysign(min(brake, abs(rate) / h), rate), brake
+
+    def _candidates(self, knot: Knot, state: tuple[np.ndarray, np.ndarray, np.ndarray],
+                    error: float, h: float, strongest: float
+                    ) -> Iterator[tuple[float, float, bool]]:
+        """
+        Yield ``(f̈, K, True)`` in order of preference, made only as they are asked for.
+
+        The landing first (``(f̈, K, False)``, a step and one more to rest at ``f*``
+        exactly), if its first instant keeps ``max_jerk``; then for ``K = K₀ 4⁻ⁱ`` the
+        step toward the slope whose grid brake at ``K`` ends at ``f*``.
+        """
+        velocity, acceleration, jerk = state
+        f, rate = knot.factor, knot.rate
+        landing = (error - 1.5 * rate * h) / (h * h)
+        reach = jerk_bounds(f, rate, velocity, acceleration, jerk, self.max_jerk, 1.0)
+        if reach[0] <= landing <= reach[1]:  # else its first instant breaks max_jerk
+            yield landing, max(abs(rate + landing * h) / h, strongest), False
+        low, high = rate_bounds(f, velocity, acceleration, self.max_acceleration)
+        c_low, c_high = jerk_bounds(f, rate, velocity, acceleration, jerk, self.max_jerk)
+        for brake in (strongest * CANDIDATES).tolist():
             wanted = rate
             for _ in range(2):  # the error after the step, f moving at (ḟ + wanted) / 2
                 left = error - h * (rate + wanted) / 2.0
                 wanted = math.copysign(brake_rate(abs(left), brake, h), left)
             wanted = min(max(wanted, low), high)
-            curvatures[index] = min(max((wanted - rate) / h, c_low, -brake), c_high, brake)
-        if not window.cubic:  # no exact ranges: the first, checked at its start only
-            return float(curvatures[0]), float(brakes[0])
-        # The landing: this step and one to rest end exactly at f* (ḟ = 0).
-        landing = (error - 1.5 * rate * h) / (h * h)
-        curvatures = np.concatenate([[landing], curvatures])
-        brakes = np.concatenate([[max(abs(rate + landing * h) / h, strongest)], brakes])
-        ok = feasible(window, tau, f, rate, curvatures, brakes, h, self.max_acceleration,
-                      self.max_jerk)
-        if ok.any():
-            index = int(np.argmax(ok))
-            return float(curvatures[index]), float(brakes[index])
-        if rate == 0.0:
-            return 0.0, 0.0
-        brake = knot.brake if knot.brake > 0.0 else strongest
-        return -math.copysign(min(brake, abs(rate) / h), rate), brake
+            yield min(max((wanted - rate) / h, c_low, -brake), c_high, brake), brake, True
