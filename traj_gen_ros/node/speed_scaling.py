@@ -21,7 +21,9 @@ the step's start: ``|f² a + ḟ v| <= max(σ a_max, f² |a|)`` (``σ = MARGIN``
 of ``ḟ`` that always holds 0; where the plan itself uses the limit the ramp waits, where
 it leaves room the ramp takes it. Under ``scurve`` (a jerk limit) ``ḟ`` is continuous:
 ``f̈`` is bounded by the jerk interval (:func:`jerk_bounds`) and ``ḟ`` kept inside the
-acceleration interval.
+acceleration interval, and a step of ``f̈`` is taken only if a brake of ``ḟ`` after it
+provably keeps both limits up to ``ḟ = 0``, looking ahead into the plan's own jerk
+phases (:mod:`traj_gen_ros.node.speed_ramp`); else the ramp waits or brakes.
 
 **How long a pause takes.** Pausing (``f* = 0``), ``ḟ <= 0`` is as steep as the binding
 joint allows, so that joint's commanded acceleration is ``-σ a_max`` (against its
@@ -29,8 +31,9 @@ velocity) all along: its commanded speed ``f |v|`` falls at ``σ a_max``. For a 
 joints move in step (a goal from rest, a synchronised goal, via points of one joint) the
 binding joint does not change, so from full speed the pause takes at most
 ``T <= max_j v_max_j / (σ a_max_j)`` (plus one step; under ``scurve`` the jerk-limited
-start and end of the slope add about ``a_max / j_max``). Where the plan already brakes
-at its limit, the plan itself comes to rest first.
+start and end of the slope add about ``a_max / j_max``, and the ramp may first wait for
+the plan's jerk phases in progress to end). Where the plan already brakes at its limit,
+the plan itself comes to rest first.
 
 No ROS here. Units: rad (or m), rad/s, rad/s², rad/s³, s; ns where named.
 """
