@@ -6,34 +6,26 @@ follow_joint_trajectory``) can use the node as its controller. The points are pa
 checked and planned in :mod:`traj_gen_ros.node.trajectory_goal`, the tolerances in
 :mod:`traj_gen_ros.node.trajectory_tolerances`; this module is the rclpy glue:
 
-* every goal is accepted and marked executing at once; one that is refused is aborted at
-  once with its ``error_code`` and a reason (MoveIt reads the status, and logs the rest),
-  and changes nothing;
-* a valid goal goes the one way every request goes
-  (:meth:`~traj_gen_ros.node.request_handler.RequestHandler.submit`): planned from the
-  stream's next tick and spliced there, so it continues the setpoint without a jump;
-* a newer goal, ``~/goal``, ``~/via_points`` or ``~/stop`` spliced in ends the active goal
-  ABORTED saying what replaced it (:attr:`RequestHandler.on_accepted`);
-* a cancel brakes to rest within the limits (``plan_stop``), then CANCELED;
+* a goal is read, planned and spliced in the goal callback, before rclpy makes its handle
+  and sends the response and status; then accepted and marked executing. One refused is
+  aborted at once with its ``error_code`` and reason, and changes nothing;
+* a valid goal goes the one way every request goes (``RequestHandler.submit``): planned
+  from the stream's next tick and spliced there, continuing the setpoint without a jump;
+* a newer goal, ``~/goal``, ``~/via_points`` or ``~/stop`` ends the active goal ABORTED
+  saying what replaced it; a cancel brakes to rest (``plan_stop``), then CANCELED;
 * a monitor timer on the executor (every ``MONITOR_PERIOD`` s while a goal is active)
-  publishes the feedback, checks the tolerances against the measured state (if any, and
-  no older than ``STALE_AFTER``) and ends the goal: SUCCEEDED once the stream has
-  published the trajectory's end (and, with a measured state, the arm is within
-  ``goal_tolerance`` and still).
+  publishes the feedback (:meth:`ActiveGoal.feedback`, at most once per stream period),
+  checks the tolerances against a measured state no older than ``STALE_AFTER`` and ends
+  the goal: SUCCEEDED once the stream has sent the trajectory's end (and the arm is
+  within ``goal_tolerance`` and still).
 
-The action server's goal, cancel and result services are served by the request thread
-(:mod:`traj_gen_ros.node.request_thread`), as ``~/goal`` is: a goal is planned and spliced
-there as soon as DDS delivers it. The terminal state and result are set by an execute
-callback scheduled on the executor only when the goal ends
+The goal, cancel and result services are served by the request thread
+(:mod:`traj_gen_ros.node.request_thread`), as ``~/goal`` is. The terminal state and
+result are set by an execute callback scheduled on the executor only when the goal ends
 (:meth:`ActionServer.notify_execute`): Jazzy's executor resumes an ``async`` one on every
-spin, a busy loop beside the stream thread. The monitor runs on the executor; what the
-two threads share (the active goal, the replaced ones) is kept under a lock, and a goal
-is watched only once it is fully started.
-
-Feedback: ``joint_names`` the goal's, in its order; ``desired`` the setpoint (position,
-velocity, acceleration) at the monitor tick; ``actual`` the measured positions (else the
-setpoint); ``error`` desired − actual; at most every ``MONITOR_PERIOD`` s (50 Hz), and at
-most once per stream period.
+spin, a busy loop beside the stream thread. What the two threads share (the active goal,
+the replaced ones) is kept under a lock; a goal is watched once it is fully started, and
+an end decided before its handle exists is applied as soon as it does.
 """
 
 from __future__ import annotations
@@ -44,7 +36,7 @@ import time
 
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.action import ActionServer, CancelResponse
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import GoalEvent, ServerGoalHandle
 from rclpy.callback_groups import CallbackGroup
 from rclpy.node import Node
@@ -112,14 +104,10 @@ class FollowJointTrajectoryServer:
         :param callback_group: the action server's (a ``NotForTheExecutor``, whose
             thread then serves :attr:`action_server`); default the node's.
         """
-        self._node = node
-        self._handler = handler
-        self._stream = stream
-        self._answers = answers
-        self._config = config
-        self._now_ns = now_ns
-        self.measured_positions = measured_positions
-        self.measured_velocities = measured_velocities
+        self._node, self._handler, self._stream, self._answers = node, handler, stream, answers
+        self._config, self._now_ns = config, now_ns
+        self.measured_positions, self.measured_velocities = measured_positions, \
+            measured_velocities
         self.measured_age: Callable[[], float] = lambda: 0.0
         #: When the goal arrived (system ns): the request thread's wake-up (attribute).
         self.arrival_ns: Callable[[], int] = time.time_ns
@@ -128,6 +116,7 @@ class FollowJointTrajectoryServer:
         self._lock = threading.Lock()
         self._active: ActiveGoal | None = None
         self._starting: ActiveGoal | None = None
+        self._pending: tuple | None = None  # (goal message, outcome) from _on_goal
         self._replaced: list[ActiveGoal] = []
         self._defaults = self._read_defaults({})
         node.add_on_set_parameters_callback(self._check_parameters)
@@ -143,7 +132,8 @@ class FollowJointTrajectoryServer:
         self._timer.cancel()
         self._server = ActionServer(
             node, FollowJointTrajectory, '~/follow_joint_trajectory', self._unexpected,
-            handle_accepted_callback=self._start, cancel_callback=self._on_cancel,
+            goal_callback=self._on_goal, handle_accepted_callback=self._start,
+            cancel_callback=self._on_cancel,
             callback_group=callback_group)
 
     @property
@@ -172,33 +162,56 @@ class FollowJointTrajectoryServer:
 
     # ------------------------------------------------------------------ a new goal
 
-    def _start(self, handle: ServerGoalHandle) -> None:
-        """Mark an accepted goal executing, then refuse it or splice it in (request thread)."""
+    def _on_goal(self, message: object) -> GoalResponse:
+        """
+        Read, plan and splice a goal before rclpy answers it (request thread): sooner.
+
+        Every goal is accepted; one refused is aborted in :meth:`_start`, with its reason.
+        """
         received = self.arrival_ns()  # as ~/goal's 'received': system ns
-        handle._update_state(GoalEvent.EXECUTE)  # what execute() does, minus scheduling
-        message = handle.request
         trajectory = message.trajectory
         request = Request(KIND, self._answers.values(KIND, trajectory.header.frame_id,
                                                      received), 0, None)
+        outcome: tuple = (INVALID_GOAL, 'internal error: not planned')
         try:
-            active = read_goal_message(handle, request, self._config().joints,
+            active = read_goal_message(message, request, self._config().joints,
                                        self._defaults[1], self._now_ns())
             self._starting = active
             motion = self._handler.submit(request, self._planner(active))
+            if motion is None:  # refused (answered on ~/status already): say why here too
+                refusal = active.goal.refusal or GoalError(
+                    INVALID_GOAL, request.refusal or 'refused: resend it')
+                outcome = (refusal.code, str(refusal))
+            else:
+                outcome = (active, motion)
         except GoalError as error:
             self._answers.refused(request, str(error))
-            self._end(handle, ABORTED, error.code, str(error))
-            return
+            outcome = (error.code, str(error))
         except Exception as error:  # noqa: BLE001 - a goal must never kill the node
             self._log.error(f'{KIND}: unexpected failure: {error!r}')
-            self._end(handle, ABORTED, INVALID_GOAL, f'internal error: {error}')
-            return
+            outcome = (INVALID_GOAL, f'internal error: {error}')
         finally:
             self._starting = None
-        if motion is None:  # refused (answered on ~/status already): say why here too
-            refusal = active.goal.refusal or GoalError(
-                INVALID_GOAL, request.refusal or 'refused: resend it')
-            self._end(handle, ABORTED, refusal.code, str(refusal))
+            self._pending = (message, outcome)
+        return GoalResponse.ACCEPT
+
+    def _start(self, handle: ServerGoalHandle) -> None:
+        """Mark the accepted goal executing; end it if it was refused or ended (request thread)."""
+        pending, self._pending = self._pending, None
+        if pending is None or pending[0] is not handle.request:  # not seen by _on_goal
+            self._on_goal(handle.request)
+            pending, self._pending = self._pending, None
+        handle._update_state(GoalEvent.EXECUTE)  # what execute() does, minus scheduling
+        outcome = pending[1]
+        if not isinstance(outcome[0], ActiveGoal):
+            self._end(handle, ABORTED, *outcome)
+            return
+        active, motion = outcome
+        with self._lock:
+            active.handle = handle
+            early_end = active.early_end
+        if early_end is not None:  # replaced or aborted before rclpy made its handle
+            self._end(handle, *early_end)
             return
         self._started(active, motion)
 
@@ -289,8 +302,8 @@ class FollowJointTrajectoryServer:
                 active = self._active
             for goal in replaced:
                 status = CANCELED if goal.cancel is not None else ABORTED
-                self._end(goal.handle, status, INVALID_GOAL if status == ABORTED
-                          else SUCCESSFUL, goal.replaced)
+                self._end_goal(goal, status, INVALID_GOAL if status == ABORTED
+                               else SUCCESSFUL, goal.replaced)
             if active is not None and active.target is not None:  # started (_started)
                 self._watch(active)
             if self._active is None and not self._replaced:
@@ -346,7 +359,23 @@ class FollowJointTrajectoryServer:
         with self._lock:
             if self._active is active:
                 self._active = None
-        self._end(active.handle, status, code, text)
+        self._end_goal(active, status, code, text)
+
+    def _end_goal(self, goal: ActiveGoal, status: str, code: int, text: str) -> None:
+        """
+        End ``goal`` once; before its handle exists, in :meth:`_start`.
+
+        The first end decided counts: the monitor may end a goal that the request thread
+        has just replaced.
+        """
+        with self._lock:
+            if goal.ended:
+                return
+            goal.ended = True
+            if goal.handle is None:
+                goal.early_end = (status, code, text)
+                return
+        self._end(goal.handle, status, code, text)
 
     def _end(self, handle: ServerGoalHandle, status: str, code: int, text: str) -> None:
         """Schedule the goal's terminal state and result (see the module doc)."""

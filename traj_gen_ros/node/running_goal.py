@@ -23,7 +23,7 @@ from trajectory_msgs.msg import JointTrajectoryPoint
 class ActiveGoal:
     """A goal being executed: its handle, request, tolerances and times (ns, node clock)."""
 
-    handle: ServerGoalHandle
+    handle: ServerGoalHandle | None  # None until rclpy has made it (after the plan)
     goal: TrajectoryGoal
     request: Request
     tolerances: Tolerances
@@ -35,6 +35,9 @@ class ActiveGoal:
     replaced: str = ''
     feedback_ns: int = -(2 ** 62)
     at_rest_ns: int | None = None  # the first setpoint published at the end, at rest
+    #: An end decided before the handle existed: ``(status, error_code, error_string)``.
+    early_end: tuple[str, int, str] | None = None
+    ended: bool = False  # its end is decided: the first one counts
 
     def end(self, now_ns: int, published_ns: int, moving: bool) -> int:
         """
@@ -74,16 +77,16 @@ class ActiveGoal:
         return feedback
 
 
-def read_goal_message(handle: ServerGoalHandle, request: Request, joints: Sequence[str],
+def read_goal_message(message: object, request: Request, joints: Sequence[str],
                       defaults: Tolerances, now_ns: int) -> ActiveGoal:
     """
-    Read an accepted goal's message: its points, stamp and tolerances; ``GoalError``.
+    Read a goal's message (``FollowJointTrajectory.Goal``): points, stamp, tolerances.
 
-    ``request`` (the goal's answer on ``~/status``) gets the parsed goal and its stamp
-    (ns); ``defaults`` are the tolerance parameters; ``now_ns`` the node clock (ns), for
-    ``OLD_HEADER_TIMESTAMP``.
+    ``GoalError`` if it cannot be executed. ``request`` (the goal's answer on
+    ``~/status``) gets the parsed goal and its stamp (ns); ``defaults`` are the tolerance
+    parameters; ``now_ns`` the node clock (ns), for ``OLD_HEADER_TIMESTAMP``. The
+    :class:`ActiveGoal` has no handle yet.
     """
-    message = handle.request
     trajectory = message.trajectory
     stamp = trajectory.header.stamp
     points = [(p.positions, p.velocities, p.accelerations, seconds(p.time_from_start))
@@ -97,4 +100,4 @@ def read_goal_message(handle: ServerGoalHandle, request: Request, joints: Sequen
         seconds(message.goal_time_tolerance))
     check_stamp(goal, now_ns)
     request.request, request.stamp_ns = goal, goal.stamp_ns
-    return ActiveGoal(handle, goal, request, tolerances)
+    return ActiveGoal(None, goal, request, tolerances)
