@@ -35,7 +35,7 @@ def session():
 
 def divided_differences(probe, first):
     """
-    The acceleration ``Δv/Δt`` and jerk ``2 v[t₀, t₁, t₂]`` of joint_1 from sample ``first``.
+    Return the acceleration ``Δv/Δt``, jerk ``2 v[t₀, t₁, t₂]`` of joint_1 from ``first``.
 
     Times from whole nanoseconds since the first sample (seconds since 1970 as a double
     would blur a 10 ms step by 2e-5 of it).

@@ -155,7 +155,6 @@ class PlanWindow:
                                r) for k, r in enumerate(result)]
         return result
 
-
     def joint_ranges(self, start: float, end: float) -> list[tuple[float, ...]]:
         """
         Return per joint ``(v_min, v_max, a_min, a_max, j_min, j_max)`` over ``[start, end]``.
