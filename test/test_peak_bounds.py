@@ -4,7 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 import numpy as np
 from traj_gen_ros import cubic, limit_violation, quintic_via
-from traj_gen_ros.core.exact.piece_extrema import peak_abs, peak_bounds
+from traj_gen_ros.core.exact.piece_extrema import peak_abs, peak_bounds, peaks_above
 from traj_gen_ros.core.trajectory import Trajectory
 
 coefficient = st.floats(-1e3, 1e3, allow_nan=False, allow_subnormal=False)
@@ -19,6 +19,26 @@ def test_a_bound_is_never_below_the_exact_peak(rows, lengths, size):
     durations = np.array(lengths[:len(rows)])[:, None]
     (peak,), (bound,) = peak_abs(durations, series), peak_bounds(durations, series)
     assert bound >= peak * (1.0 - 1e-12) - 1e-12
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.lists(coefficient, min_size=5, max_size=5), min_size=2, max_size=12),
+       st.lists(st.floats(1e-3, 10.0), min_size=12, max_size=12), st.integers(1, 5),
+       st.floats(0.0, 1.5))
+def test_peaks_above_a_limit_are_the_exact_peaks_and_within_it_bound_them(
+        rows, lengths, size, share):
+    """Roots only where a bound exceeds: above the limit exact, within it never below."""
+    rows = rows[:len(rows) // 2 * 2]
+    series = np.array(rows)[:, :size].reshape(-1, 2, size).transpose(0, 2, 1)  # two joints
+    durations = np.array(lengths[:len(series)])[:, None].repeat(2, axis=1)
+    (peak,) = peak_abs(durations, series)
+    limit = share * peak.max() + np.array([0.0, 1e-3])
+    (result,) = peaks_above(durations, [limit], series)
+    for joint in range(2):
+        if peak[joint] > limit[joint]:
+            assert result[joint] == peak[joint]  # the same roots of the same pieces
+        else:
+            assert peak[joint] * (1 - 1e-12) - 1e-12 <= result[joint] <= limit[joint]
 
 
 def test_craigs_cubic_velocity_bound_is_within_one_percent_of_its_peak():

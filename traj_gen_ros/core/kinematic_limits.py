@@ -22,6 +22,8 @@ from traj_gen_ros.core.trajectory import Trajectory
 
 #: Relative slack on every limit: rounding in the solvers, never a real excess.
 LIMIT_TOLERANCE = 1e-9
+#: The quantities of :func:`limit_ratios`' rows.
+QUANTITIES = ('velocity', 'acceleration', 'jerk')
 
 _UNITS = {'velocity': 'rad/s', 'acceleration': 'rad/s^2', 'jerk': 'rad/s^3'}
 
@@ -62,6 +64,26 @@ class Violation:
                 f'max_{self.quantity} {self.limit:.6g} {unit}')
 
 
+def limit_ratios(
+    trajectory: Trajectory,
+    max_velocity: np.ndarray,
+    max_acceleration: np.ndarray,
+    max_jerk: np.ndarray | None = None,
+) -> np.ndarray:
+    """
+    Return ``peak / limit`` per quantity (velocity, acceleration[, jerk]) and joint.
+
+    ``(2 or 3, joints)``. Exact wherever above 1; within 1 it may be a bound of the ratio
+    (never below it): the exact peaks are found only on pieces whose Bernstein bound is
+    above the limit (:meth:`Trajectory.peaks_above`).
+    """
+    limits = [np.asarray(max_velocity, dtype=float), np.asarray(max_acceleration, dtype=float)]
+    if max_jerk is not None:
+        limits.append(np.asarray(max_jerk, dtype=float))
+    peaks = trajectory.peaks_above(limits)
+    return np.array([peak / limit for peak, limit in zip(peaks, limits, strict=True)])
+
+
 def limit_violation(
     trajectory: Trajectory,
     max_velocity: np.ndarray,
@@ -72,28 +94,18 @@ def limit_violation(
     Return the worst excess over the limits (``(joints,)`` arrays), or ``None`` if within.
 
     The excess is measured relative to the limit; ``LIMIT_TOLERANCE`` of it is allowed.
-    The exact peaks are found only where the pieces' Bernstein bounds (never below the
-    peaks: :meth:`Trajectory.peak_bounds`) are not already within the limits.
+    The exact peaks are found only on the pieces whose Bernstein bounds (never below the
+    peaks) are not already within the limits (:func:`limit_ratios`).
     """
-    limits = [np.asarray(max_velocity, dtype=float), np.asarray(max_acceleration, dtype=float)]
-    names = ['velocity', 'acceleration']
-    if max_jerk is not None:
-        limits.append(np.asarray(max_jerk, dtype=float))
-    bounds = trajectory.peak_bounds(len(limits))
-    if all(np.count_nonzero(bound <= limit) == bound.size
-           for bound, limit in zip(bounds, limits, strict=True)):
-        return None
-    if max_jerk is None:
-        peaks = list(trajectory.peaks()[:2])
-    else:
-        peaks = list(trajectory.peaks_with_jerk())
-        names.append('jerk')
-    ratios = np.array([peak / limit for peak, limit in zip(peaks, limits, strict=True)])
+    ratios = limit_ratios(trajectory, max_velocity, max_acceleration, max_jerk)
     if np.count_nonzero(ratios <= 1.0 + LIMIT_TOLERANCE) == ratios.size:
         return None
+    limits = [max_velocity, max_acceleration, max_jerk]
     quantity, joint = divmod(int(ratios.argmax()), ratios.shape[1])
-    return Violation(int(joint), names[quantity], float(peaks[quantity][joint]),
-                     float(limits[quantity][joint]))
+    limit = float(np.broadcast_to(np.asarray(limits[quantity], dtype=float),
+                                  (ratios.shape[1],))[joint])
+    return Violation(int(joint), QUANTITIES[quantity], float(ratios[quantity, joint] * limit),
+                     limit)
 
 
 def within_limits(

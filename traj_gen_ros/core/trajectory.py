@@ -19,6 +19,7 @@ from traj_gen_ros.core.exact.piece_extrema import (
     derivative,
     peak_abs,
     peak_bounds,
+    peaks_above,
     position_extrema,
 )
 
@@ -131,6 +132,17 @@ class Trajectory:
         peak_bounds`), a cheap first check before the exact peaks.
         """
         return peak_bounds(self._piece_durations(self.joint_count), *self._series(orders))
+
+    def peaks_above(self, limits: list[np.ndarray]) -> list[np.ndarray]:
+        """
+        Peaks of ``|velocity|``, ``|acceleration|`` (and ``|jerk|``: one limit per order).
+
+        Exact wherever above ``limits`` (``(joints,)`` each), else a bound within them
+        (:func:`~traj_gen_ros.core.exact.piece_extrema.peaks_above`): the roots are found
+        only on pieces whose Bernstein bound is above the limit.
+        """
+        return peaks_above(self._piece_durations(self.joint_count), limits,
+                           *self._series(len(limits)))
 
     def _peaks(self, orders: int) -> list[np.ndarray]:
         """Exact peaks of the first ``orders`` derivatives, in one call."""

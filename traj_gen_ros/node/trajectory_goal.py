@@ -37,7 +37,12 @@ from dataclasses import dataclass
 import math
 
 import numpy as np
-from traj_gen_ros.core.kinematic_limits import JointError, limit_violation
+from traj_gen_ros.core.kinematic_limits import (
+    JointError,
+    limit_ratios,
+    LIMIT_TOLERANCE,
+    limit_violation,
+)
 from traj_gen_ros.core.paths import plan_path
 from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.config import Config
@@ -187,25 +192,25 @@ def slow_down(plan: Trajectory, config: Config) -> tuple[float, str]:
     """
     Return the smallest uniform slow-down ``s >= 1`` that fits the limits, and why.
 
-    ``s = max(1, v_peak/v_max, sqrt(a_peak/a_max))`` over the joints, from the exact peaks.
-    ``s = 1`` exactly when the core's ``limit_violation`` passes ``plan`` (usually on its
-    Bernstein bounds alone), so a plan that is not slowed needs no second check. The text
-    names the joint and quantity that set it, e.g. ``joint 'joint_1' velocity 2.06 rad/s
-    above max_velocity 2 rad/s``.
+    ``s = max(1, v_peak/v_max, sqrt(a_peak/a_max))`` over the joints, from the exact peaks
+    (the core's :func:`limit_ratios`: roots only on pieces whose Bernstein bound is above
+    a limit). ``s = 1`` exactly when the core's ``limit_violation`` passes ``plan`` (the
+    same ratios, the same tolerance). The text names the joint and quantity that set it,
+    e.g. ``joint 'joint_1' velocity 2.06 rad/s above max_velocity 2 rad/s``.
     """
-    if limit_violation(plan, config.max_velocity, config.max_acceleration) is None:
+    ratios = limit_ratios(plan, config.max_velocity, config.max_acceleration)
+    if np.count_nonzero(ratios <= 1.0 + LIMIT_TOLERANCE) == ratios.size:
         return 1.0, ''
-    velocity, acceleration = plan.peaks()
-    ratios = np.vstack([velocity / config.max_velocity,
-                        np.sqrt(acceleration / config.max_acceleration)])
+    ratios[1] = np.sqrt(ratios[1])
     quantity, joint = divmod(int(np.argmax(ratios)), ratios.shape[1])
     factor = float(ratios[quantity, joint])
     name = config.joints[joint]
     if quantity == 0:
-        why = (f'joint {name!r} velocity {velocity[joint]:.6g} rad/s above max_velocity '
-               f'{config.max_velocity[joint]:.6g} rad/s')
+        why = (f'joint {name!r} velocity {factor * config.max_velocity[joint]:.6g} rad/s '
+               f'above max_velocity {config.max_velocity[joint]:.6g} rad/s')
     else:
-        why = (f'joint {name!r} acceleration {acceleration[joint]:.6g} rad/s^2 above '
+        why = (f'joint {name!r} acceleration '
+               f'{factor ** 2 * config.max_acceleration[joint]:.6g} rad/s^2 above '
                f'max_acceleration {config.max_acceleration[joint]:.6g} rad/s^2')
     return factor, why
 

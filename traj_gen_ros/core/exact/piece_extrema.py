@@ -94,6 +94,28 @@ def peak_bounds(durations: np.ndarray, *series: np.ndarray) -> list[np.ndarray]:
     return list(bounds.max(axis=1, initial=0.0))
 
 
+def peaks_above(durations: np.ndarray, limits: list[np.ndarray], *series: np.ndarray
+                ) -> list[np.ndarray]:
+    """
+    Per joint, the exact peak of ``|p(t)|`` where it is above ``limits``, else a bound within.
+
+    As :func:`peak_bounds` then :func:`peak_abs`, but the roots are found only for the
+    pieces whose Bernstein bound is above the joint's limit (``limits``: one ``(joints,)``
+    per series). Each result is ``max(exact peaks of those pieces, bounds of the others)``:
+    the others' bounds are within the limit, so a result above the limit is the exact
+    peak, and one within it bounds the peak from above.
+    """
+    rows = _unit_rows(durations, series)
+    pieces, joints = durations.shape
+    bounds = np.abs(rows @ _HULL).max(axis=2)  # (series, pieces · joints)
+    limit = np.stack([np.broadcast_to(np.asarray(lim, dtype=float), (joints,))
+                      for lim in limits])  # (series, joints)
+    above = bounds > np.tile(limit, (1, pieces))  # piece-major, as the rows
+    if above.any():
+        bounds[above] = unit_peaks(rows[above])
+    return list(bounds.reshape(len(series), pieces, joints).max(axis=1, initial=0.0))
+
+
 def _unit_rows(durations: np.ndarray, series: tuple[np.ndarray, ...]) -> np.ndarray:
     """Each series' pieces rescaled to unit time (``c_k L^k``), ``(series, pieces·joints, 5)``."""
     pieces, joints = durations.shape

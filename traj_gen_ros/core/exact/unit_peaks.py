@@ -53,7 +53,8 @@ def _polished(slope: np.ndarray, points: np.ndarray) -> np.ndarray:
     for _ in range(2):
         value, bend = np.einsum('cmk,jck->jcm', points[:, :, None] ** _POWERS[:size], pair)
         bend[bend == 0.0] = np.inf
-        points = np.minimum(np.maximum(points - value / bend, 0.0), 1.0)
+        with np.errstate(over='ignore'):  # a step beyond ±1e308 is clipped to [0, 1] too
+            points = np.minimum(np.maximum(points - value / bend, 0.0), 1.0)
     return points
 
 
