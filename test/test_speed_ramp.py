@@ -11,16 +11,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 import numpy as np
 import pytest
+from traj_gen_ros import quintic_via
 from traj_gen_ros.core.timing import min_time
 from traj_gen_ros.core.trajectory import state_at
-from traj_gen_ros.node.speed_ramp import (
-    _rows,
-    _within,
-    envelope,
-    jerk_at,
-    keeps_limits,
-    PlanWindow,
-)
+from traj_gen_ros.node.plan_window import bernstein_range, jerk_at, PlanWindow
+from traj_gen_ros.node.speed_ramp import _rows, _within, envelope, keeps_limits
 
 A_MAX = np.array([2.0, 2.0, 1.5])
 J_MAX = np.array([10.0, 10.0, 8.0])
@@ -112,3 +107,33 @@ def test_a_brake_through_the_plans_jerk_phase_is_refused_and_one_in_its_cruise_k
     assert not keeps_limits(WINDOW, in_jerk_phase, A_MAX.tolist(), J_MAX.tolist())
     in_cruise = envelope(1.5, 1.0, -0.5, 0.0, k, h)
     assert keeps_limits(WINDOW, in_cruise, A_MAX.tolist(), J_MAX.tolist())
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(-50.0, 50.0), min_size=1, max_size=5), st.floats(0.0, 2.0),
+       st.floats(0.0, 2.0))
+def test_bernstein_range_holds_the_polynomial_and_its_ends(coefficients, start, width):
+    low, high = bernstein_range(coefficients, start, width)
+    u = np.linspace(start, start + width, 401)
+    values = np.polynomial.polynomial.polyval(u, coefficients)
+    scale = 1e-9 * (1.0 + np.abs(values).max())
+    assert low <= values.min() + scale and high >= values.max() - scale
+    assert low <= values[0] + scale and high >= values[-1] - scale
+
+
+def test_quintic_ranges_are_bounds_that_hold_every_sample():
+    """An action goal's quintics: joint_ranges bounds v, a, j over any interval."""
+    plan = quintic_via(np.array([[0, 0], [0.3, -0.2], [0.9, -0.5], [1.6, -0.6]], dtype=float),
+                       np.full(3, 0.6))
+    window = PlanWindow(plan)
+    assert not window.cubic
+    for start, end in [(0.0, 0.05), (0.1, 0.7), (0.55, 0.65), (1.0, 1.9), (1.7, 2.0)]:
+        bounds = np.array(window.joint_ranges(start, end))  # (joints, 6)
+        times = np.linspace(start, min(end, plan.duration), 301)
+        states = [state_at(plan, t) for t in times]
+        v = np.array([s[1] for s in states])
+        a = np.array([s[2] for s in states])
+        j = np.array([jerk_at(plan, t) for t in times[:-1] + 1e-9])
+        for column, samples in enumerate((v, a, j)):
+            assert np.all(bounds[:, 2 * column] <= samples.min(axis=0) + 1e-9)
+            assert np.all(bounds[:, 2 * column + 1] >= samples.max(axis=0) - 1e-9)

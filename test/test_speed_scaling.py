@@ -7,9 +7,9 @@ import pytest
 from traj_gen_ros.core.timing import min_time
 from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.motion import held, PlannedMotion
+from traj_gen_ros.node.plan_window import jerk_at, PlanWindow
 from traj_gen_ros.node.planning import plan_stop
 from traj_gen_ros.node.schedule import Schedule
-from traj_gen_ros.node.speed_ramp import jerk_at, PlanWindow
 from traj_gen_ros.node.speed_scaling import (
     check_factor,
     FactorInputs,

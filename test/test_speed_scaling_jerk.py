@@ -12,9 +12,10 @@ to 3.2 s of its own time).
 
 import numpy as np
 import pytest
+from traj_gen_ros import quintic_via
 from traj_gen_ros.core.timing import min_time
 from traj_gen_ros.core.trajectory import state_at
-from traj_gen_ros.node.speed_ramp import jerk_at, PlanWindow
+from traj_gen_ros.node.plan_window import jerk_at, PlanWindow
 from traj_gen_ros.node.speed_scaling import TimeMap
 
 MS = 1_000_000
@@ -24,20 +25,30 @@ J_MAX = np.array([10.0, 10.0])
 SUB = 4  # samples per 1 ms step
 
 
-def commanded(changes: dict[int, float], end_ms: int = 20000) -> dict[str, float]:
+def scurve_plan():
+    """Return the module's plan: scurve 0 → (3, -1.5) rad in 3.7 s."""
+    plan = min_time(np.zeros(2), np.array([3.0, -1.5]), np.ones(2), A_MAX, 'scurve',
+                    max_jerk=J_MAX)
+    assert plan.duration == pytest.approx(3.7)
+    return plan
+
+
+def commanded(changes: dict[int, float], end_ms: int = 20000, plan=None,
+              a_max=A_MAX, j_max=J_MAX) -> dict[str, float]:
     """
     Run the plan with the factor asked for changing at ``changes`` (ms: factor).
 
     Return the worst ``|jerk| / max_jerk``, ``|acceleration| / max_acceleration`` and the
     change of the acceleration between two samples over ``max_jerk × Δt`` (its
-    continuity), over every joint and sample until the plan ends.
+    continuity), over every joint and sample until the plan ends; and ``paused``, the
+    first time (ms) the factor is 0, if it is. A plan that jerks harder than ``max_jerk``
+    itself is held to its own peak (docs/node.md).
     """
-    plan = min_time(np.zeros(2), np.array([3.0, -1.5]), np.ones(2), A_MAX, 'scurve',
-                    max_jerk=J_MAX)
-    assert plan.duration == pytest.approx(3.7)
-    time_map = TimeMap(A_MAX, J_MAX, origin_ns=T0)
+    plan = plan or scurve_plan()
+    time_map = TimeMap(a_max, j_max, origin_ns=T0)
     start = time_map.at(T0, lambda time_ns, clock: None)[0]
     window = PlanWindow(plan)
+    j_max = np.maximum(j_max, window.peak_jerk)
 
     def plan_state(time_ns, clock):
         tau = clock - start
@@ -60,13 +71,15 @@ def commanded(changes: dict[int, float], end_ms: int = 20000) -> dict[str, float
         j = jerk_at(plan, tau)
         acceleration = f * f * a + rate * v
         jerk = f ** 3 * j + 3.0 * f * rate * a + curvature * v
-        worst['jerk'] = max(worst['jerk'], float(np.max(np.abs(jerk) / J_MAX)))
+        worst['jerk'] = max(worst['jerk'], float(np.max(np.abs(jerk) / j_max)))
         worst['acceleration'] = max(worst['acceleration'],
-                                    float(np.max(np.abs(acceleration) / A_MAX)))
+                                    float(np.max(np.abs(acceleration) / a_max)))
         if previous is not None:
             worst['step'] = max(worst['step'], float(np.max(
-                np.abs(acceleration - previous) / (J_MAX * step_ns * 1e-9))))
+                np.abs(acceleration - previous) / (j_max * step_ns * 1e-9))))
         previous = acceleration
+        if f == 0.0 and 'paused' not in worst:
+            worst['paused'] = k / SUB
     else:
         raise AssertionError('the plan did not end')
     return worst
@@ -102,3 +115,22 @@ def test_a_ramp_over_the_plans_jerk_phases_keeps_jerk_within_the_limit(changes):
     worst = commanded(changes)
     assert worst['acceleration'] <= 1.0 + 1e-6, worst
     assert worst['jerk'] <= 1.0 + 1e-6, worst
+
+
+#: An action goal's shape: quintics through five points at 0.6 s each (2.4 s), within
+#: 4 rad/s² but jerking up to 53 rad/s³ itself, under a max_jerk of 20.
+QUINTIC = quintic_via(np.array([[0, 0], [0.3, -0.2], [0.9, -0.5], [1.6, -0.6], [2.0, -0.5]],
+                               dtype=float), np.full(4, 0.6))
+
+
+@pytest.mark.parametrize('asked_ms', [300, 1000, 1700])
+def test_a_pause_of_quintic_pieces_keeps_their_limits_and_comes_to_rest(asked_ms):
+    """Bernstein bounds (not exact) over quintics: still within the limits, and it pauses."""
+    a_max = np.array([4.0, 4.0])
+    assert np.all(QUINTIC.peaks()[1] <= a_max) and QUINTIC.peak_jerk().max() > 50.0
+    worst = commanded({asked_ms: 0.0, asked_ms + 1500: 1.0}, plan=QUINTIC, a_max=a_max,
+                      j_max=np.full(2, 20.0))
+    assert worst['acceleration'] <= 1.0 + 1e-6, worst
+    assert worst['jerk'] <= 1.0 + 1e-6, worst
+    assert worst['step'] <= 1.0 + 1e-6, worst
+    assert asked_ms < worst['paused'] < asked_ms + 700, worst  # paused, then resumed

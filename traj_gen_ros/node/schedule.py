@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from traj_gen_ros.core.trajectory import state_at
 from traj_gen_ros.node.motion import PlannedMotion, State
-from traj_gen_ros.node.speed_ramp import PlanWindow
+from traj_gen_ros.node.plan_window import PlanWindow
 from traj_gen_ros.node.speed_scaling import TimeMap
 
 #: "Since forever": the start of the first motion (ns).

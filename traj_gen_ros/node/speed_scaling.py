@@ -45,7 +45,8 @@ from dataclasses import dataclass, replace
 import math
 
 import numpy as np
-from traj_gen_ros.node.speed_ramp import brake_rate, first_feasible, PlanWindow
+from traj_gen_ros.node.plan_window import PlanWindow
+from traj_gen_ros.node.speed_ramp import brake_rate, first_feasible
 
 #: The ramp's grid (ns): ``ḟ`` (or ``f̈``) is constant on each step.
 STEP_NS = 1_000_000
@@ -349,13 +350,15 @@ class TimeMap:
         strongest = (MARGIN * float(np.min(self.max_jerk[moving] / np.abs(velocity[moving])))
                      if moving.any() else 1.0 / (h * h))
         candidates = self._candidates(knot, state, error, h, strongest)
-        if not window.cubic:  # no exact ranges: the first, checked at its start only
-            return next(c for c in candidates if c[2])[:2]
         # Waiting at ḟ = 0 is safe for ever: then the dearer chunked check is made only on
-        # every RETRY-th step (a ramp starts at most RETRY - 1 steps later for it).
+        # every RETRY-th step (a ramp starts at most RETRY - 1 steps later for it); over
+        # pieces of a higher degree than 3 (Bernstein bounds), never.
         retry = rate != 0.0 or (knot.time_ns // self.step_ns) % RETRY == 0
+        # A plan that jerks harder than max_jerk itself (an action goal: executed as given)
+        # is held to its own peak, never to less: else no step could pass.
+        jerk_limit = np.maximum(self.max_jerk, window.peak_jerk)
         chosen = first_feasible(window, tau, f, rate, candidates, h, self.max_acceleration,
-                                self.max_jerk, retry)
+                                jerk_limit, retry and window.cubic)
         if chosen is not None:
             return chosen
         if rate == 0.0:
