@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from traj_gen_ros import quintic_via
 from traj_gen_ros.core.timing import min_time
-from traj_gen_ros.core.trajectory import state_at
+from traj_gen_ros.core.trajectory import state_at, Trajectory
 from traj_gen_ros.node.plan_window import jerk_at, PlanWindow
 from traj_gen_ros.node.speed_scaling import TimeMap
 
@@ -134,3 +134,45 @@ def test_a_pause_of_quintic_pieces_keeps_their_limits_and_comes_to_rest(asked_ms
     assert worst['jerk'] <= 1.0 + 1e-6, worst
     assert worst['step'] <= 1.0 + 1e-6, worst
     assert asked_ms < worst['paused'] < asked_ms + 700, worst  # paused, then resumed
+
+
+@pytest.mark.parametrize('splice_ms', [450, 500, 555])
+def test_a_plan_spliced_in_mid_ramp_is_checked_from_the_next_step_on(splice_ms):
+    """
+    A brake verified against the plan before a splice is not followed on the new one.
+
+    Plan A cruises at 1 rad/s; the factor ramps 1 → 0.5 (ticks 0.3 ms off the grid); plan
+    B (1 rad/s, jerking at +10 rad/s³ from its start) is spliced at the next tick. Only
+    the 1 ms step in progress at the splice was decided against A (docs/node.md).
+    """
+    plan_a = Trajectory(np.array([0.0, 100.0]), np.array([[[0.0], [1.0], [0.0], [0.0]]]))
+    plan_b = Trajectory(np.array([0.0, 0.15, 100.0]), np.array(
+        [[[0.0], [1.0], [0.0], [10.0 / 6.0]], [[0.0], [1.1125], [0.75], [0.0]]]))
+    windows = PlanWindow(plan_a), PlanWindow(plan_b)
+    time_map = TimeMap(A_MAX[:1], J_MAX[:1], origin_ns=T0)
+    origin = time_map.at(T0, lambda time_ns, clock: None)[0]
+    spliced = []  # (start ns, plan clock there)
+
+    def plan_state(time_ns, clock):
+        if spliced and time_ns >= spliced[0][0]:
+            return windows[1], clock - spliced[0][1]
+        return windows[0], clock - origin
+
+    worst = 0.0
+    for k in range(1500 * SUB):
+        time_ns = T0 + 300_000 + k * MS // SUB
+        if k % SUB == 0:
+            time_map.commit(time_ns, plan_state)
+            if k == 400 * SUB:
+                time_map.set_target(0.5, time_ns, plan_state)
+            if k == splice_ms * SUB:
+                spliced.append((time_ns + MS, time_map.at(time_ns + MS, plan_state)[0]))
+                time_map.forget()
+        clock, f, rate, curvature = time_map.at(time_ns, plan_state)
+        window, tau = plan_state(time_ns, clock)
+        v, a, j = window.state(tau)
+        if spliced and time_ns >= spliced[0][0] + 2 * MS:  # after the step in progress
+            worst = max(worst, float(np.max(np.abs(f ** 3 * j + 3 * f * rate * a
+                                                   + curvature * v) / J_MAX[:1])),
+                        float(np.max(np.abs(f * f * a + rate * v) / A_MAX[:1])))
+    assert 0.9 < worst <= 1.0 + 1e-6

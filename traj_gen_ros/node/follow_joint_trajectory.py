@@ -35,7 +35,6 @@ import threading
 import time
 
 import numpy as np
-from rcl_interfaces.msg import SetParametersResult
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import GoalEvent, ServerGoalHandle
 from rclpy.callback_groups import CallbackGroup
@@ -46,6 +45,7 @@ from traj_gen_ros.node.motion import PlannedMotion, State
 from traj_gen_ros.node.request_handler import brake_planner, RequestHandler
 from traj_gen_ros.node.running_goal import ActiveGoal, read_goal_message
 from traj_gen_ros.node.stream import Stream
+from traj_gen_ros.node.tolerance_parameters import ToleranceParameters
 from traj_gen_ros.node.trajectory_goal import (
     GoalError,
     INVALID_GOAL,
@@ -58,10 +58,7 @@ from traj_gen_ros.node.trajectory_tolerances import (
     ABORTED,
     CANCELED,
     outcome,
-    read_defaults,
     SUCCEEDED,
-    TOLERANCE_PARAMETERS,
-    Tolerances,
 )
 
 try:
@@ -118,9 +115,7 @@ class FollowJointTrajectoryServer:
         self._starting: ActiveGoal | None = None
         self._pending: tuple | None = None  # (goal message, outcome) from _on_goal
         self._replaced: list[ActiveGoal] = []
-        self._defaults = self._read_defaults({})
-        node.add_on_set_parameters_callback(self._check_parameters)
-        node.add_post_set_parameters_callback(self._apply_parameters)
+        self._tolerances = ToleranceParameters(node, lambda: len(self._config().joints))
         previous = handler.on_accepted
 
         def on_accepted(request: Request, start_ns: int) -> None:
@@ -141,25 +136,6 @@ class FollowJointTrajectoryServer:
         """Give the rclpy action server (a waitable for the thread that serves it)."""
         return self._server
 
-    # ------------------------------------------------------------------ parameters
-
-    def _read_defaults(self, changed: dict[str, object]) -> tuple[float, Tolerances]:
-        """``(allowed_start_tolerance, Tolerances)`` from the parameters; ValueError."""
-        return read_defaults(lambda name: self._node.get_parameter(name).value,
-                             len(self._config().joints), changed)
-
-    def _check_parameters(self, parameters: list) -> SetParametersResult:
-        changed = {p.name: p.value for p in parameters if p.name in TOLERANCE_PARAMETERS}
-        try:
-            self._read_defaults(changed)
-        except ValueError as error:
-            return SetParametersResult(successful=False, reason=str(error))
-        return SetParametersResult(successful=True)
-
-    def _apply_parameters(self, parameters: list) -> None:
-        if any(p.name in TOLERANCE_PARAMETERS for p in parameters):
-            self._defaults = self._read_defaults({})
-
     # ------------------------------------------------------------------ a new goal
 
     def _on_goal(self, message: object) -> GoalResponse:
@@ -169,13 +145,14 @@ class FollowJointTrajectoryServer:
         Every goal is accepted; one refused is aborted in :meth:`_start`, with its reason.
         """
         received = self.arrival_ns()  # as ~/goal's 'received': system ns
+        self._end_orphan()
         trajectory = message.trajectory
         request = Request(KIND, self._answers.values(KIND, trajectory.header.frame_id,
                                                      received), 0, None)
         outcome: tuple = (INVALID_GOAL, 'internal error: not planned')
         try:
             active = read_goal_message(message, request, self._config().joints,
-                                       self._defaults[1], self._now_ns())
+                                       self._tolerances.defaults[1], self._now_ns())
             self._starting = active
             motion = self._handler.submit(request, self._planner(active))
             if motion is None:  # refused (answered on ~/status already): say why here too
@@ -194,6 +171,15 @@ class FollowJointTrajectoryServer:
             self._starting = None
             self._pending = (message, outcome)
         return GoalResponse.ACCEPT
+
+    def _end_orphan(self) -> None:
+        """End a goal planned in :meth:`_on_goal` whose handle rclpy never made."""
+        pending, self._pending = self._pending, None
+        if pending is not None and isinstance(pending[1][0], ActiveGoal):
+            # rclpy could not send its response (the client went away): nobody owns it.
+            self._log.warning(f'{KIND}: a goal whose response could not be sent was '
+                              'running: ended; its motion goes on as any other')
+            self._finish(pending[1][0], ABORTED, INVALID_GOAL, 'the goal response failed')
 
     def _start(self, handle: ServerGoalHandle) -> None:
         """Mark the accepted goal executing; end it if it was refused or ended (request thread)."""
@@ -216,7 +202,7 @@ class FollowJointTrajectoryServer:
         self._started(active, motion)
 
     def _planner(self, active: ActiveGoal) -> Callable[..., PlannedMotion]:
-        tolerance = self._defaults[0]
+        tolerance = self._tolerances.defaults[0]
 
         def plan(config: Config, state: State, hold_at: np.ndarray,
                  goal: TrajectoryGoal) -> PlannedMotion:
@@ -313,11 +299,11 @@ class FollowJointTrajectoryServer:
 
     def _watch(self, active: ActiveGoal) -> None:
         now_ns = self._now_ns()
-        published_ns = self._stream.last_sent()  # judged on what a client can already have
+        # Judged on what a client can already have: the last setpoint sent, and if it moved.
+        published_ns, moving = self._stream.last_sent()
         if active.cancel is not None:
             start = active.brake_start_ns
-            if start is not None and published_ns >= start and \
-                    not self._stream.moving_at(published_ns):
+            if start is not None and published_ns >= start and not moving:
                 self._finish(active, CANCELED, SUCCESSFUL, 'canceled: braked to rest')
             return
         desired = self._stream.setpoint(max(now_ns, published_ns))  # commanded: scaled
@@ -325,7 +311,7 @@ class FollowJointTrajectoryServer:
         self._feedback(active, now_ns, desired, measured)
         if measured is not None and self.measured_age() > STALE_AFTER:
             return  # judged on a fresh one, or ended by the timeout (abort_active)
-        end_ns = active.end(now_ns, published_ns, self._stream.moving_at(published_ns))
+        end_ns = active.end(now_ns, published_ns, moving)
         ended = outcome(active.tolerances, active.goal.request.joints, self._config().joints,
                         (active.start_ns, end_ns, now_ns, published_ns),
                         desired.position, active.target, measured,

@@ -180,9 +180,12 @@ class Knot:
     rate: float = 0.0
     curvature: float = 0.0
     #: Under a jerk limit, ``K`` (1/s²) of the brake verified from this knot's state
-    #: (:func:`~traj_gen_ros.node.speed_ramp.first_feasible`), and of the one from the next.
+    #: (:func:`~traj_gen_ros.node.speed_ramp.first_feasible`), and of the one from the next;
+    #: each with the plan window it was verified against (None: not verified).
     brake: float = 0.0
     next_brake: float = 0.0
+    verified: object = None
+    next_verified: object = None
 
     def at(self, time_ns: int) -> tuple[float, float, float, float]:
         """``(P, f, ḟ, f̈)`` at ``time_ns`` within the step after this knot (exact)."""
@@ -243,8 +246,8 @@ class TimeMap:
         no longer taken for verified (the next step's candidates are checked afresh).
         """
         self._ahead.clear()
-        if self._base is not None and self._base.next_brake:
-            self._base = replace(self._base, next_brake=0.0)
+        if self._base is not None and self._base.next_verified is not None:
+            self._base = replace(self._base, next_brake=0.0, next_verified=None)
 
     def set_target(self, factor: float, from_ns: int, plan_state: PlanState) -> None:
         """Ramp toward ``factor`` (in [0, 1]) from the first grid time at or after ``from_ns``."""
@@ -299,7 +302,7 @@ class TimeMap:
             if slow and abs(self.target - factor) <= SETTLED:
                 factor, rate = self.target, 0.0
             knot = Knot(knot.time_ns + self.step_ns, clock, factor, rate,
-                        brake=knot.next_brake)
+                        brake=knot.next_brake, verified=knot.next_verified)
             knot = self._decide(knot, plan_state)
             self._ahead.append(knot)
         return knot
@@ -318,16 +321,19 @@ class TimeMap:
             low, high = (-math.inf, math.inf) if found is None else rate_bounds(
                 knot.factor, velocity, acceleration, self.max_acceleration)
             return Knot(knot.time_ns, knot.clock, knot.factor, min(max(error / h, low), high))
-        curvature, brake = self._curvature(knot, window, tau, (velocity, acceleration, jerk),
-                                           error, h)
+        curvature, brake, checked = self._curvature(
+            knot, window, tau, (velocity, acceleration, jerk), error, h)
         return Knot(knot.time_ns, knot.clock, knot.factor, knot.rate, curvature,
-                    knot.brake, brake)
+                    knot.brake, brake, knot.verified, checked)
 
     def _curvature(self, knot: Knot, window: PlanWindow, tau: float,
                    state: tuple[np.ndarray, np.ndarray, np.ndarray], error: float, h: float
-                   ) -> tuple[float, float]:
+                   ) -> tuple[float, float, PlanWindow | None]:
         """
-        ``(f̈, K)`` on the step after ``knot`` under a jerk limit, and the brake verified after it.
+        ``(f̈, K, window)`` on the step after ``knot`` under a jerk limit; ``K``: the brake then.
+
+        ``window`` is the plan window ``K`` was verified against (None: not verified). A
+        brake verified against another window (the plan before a splice) is not followed.
 
         Candidates for ``K`` are ``K₀ 4⁻ⁱ`` (``K₀ = σ min j_max / |v|`` over the moving
         joints): each asks for the slope ``ḟ`` whose grid brake at ``K`` ends at ``f*``
@@ -340,12 +346,13 @@ class TimeMap:
         """
         velocity, acceleration, jerk = state
         f, rate = knot.factor, knot.rate
-        if knot.brake > 0.0 and rate * error > 0.0 and abs(rate) > 2.0 * knot.brake * h and \
-                abs(rate) >= (1.0 - ON_CURVE) * brake_rate(abs(error), knot.brake, h):
+        own = knot.brake if knot.verified is window else 0.0  # verified against this plan
+        if own > 0.0 and rate * error > 0.0 and abs(rate) > 2.0 * own * h and \
+                abs(rate) >= (1.0 - ON_CURVE) * brake_rate(abs(error), own, h):
             # On (or past) the verified brake's curve to f*: follow it (its tail is
             # verified, no check needed); a stronger brake might land a little sooner.
             # Its last two steps are chosen afresh: the landing puts f on f* at rest.
-            return -math.copysign(min(knot.brake, abs(rate) / h), rate), knot.brake
+            return -math.copysign(min(own, abs(rate) / h), rate), own, window
         moving = np.abs(velocity) > RESTING
         strongest = (MARGIN * float(np.min(self.max_jerk[moving] / np.abs(velocity[moving])))
                      if moving.any() else 1.0 / (h * h))
@@ -360,11 +367,17 @@ class TimeMap:
         chosen = first_feasible(window, tau, f, rate, candidates, h, self.max_acceleration,
                                 jerk_limit, retry and window.cubic)
         if chosen is not None:
-            return chosen
+            return *chosen, window
         if rate == 0.0:
-            return 0.0, 0.0
-        brake = knot.brake if knot.brake > 0.0 else strongest
-        return -math.copysign(min(brake, abs(rate) / h), rate), brake
+            return 0.0, 0.0, None
+        if own > 0.0:  # the verified brake goes on
+            return -math.copysign(min(own, abs(rate) / h), rate), own, window
+        # None verified against this plan (one just spliced in, new limits): toward the
+        # strongest brake as far as the jerk bound at the step's start allows (it holds
+        # f̈ = 0), bounded at its start only; every next step is checked again.
+        low, high = jerk_bounds(f, rate, velocity, acceleration, jerk, jerk_limit, 1.0)
+        brake = -math.copysign(min(strongest, abs(rate) / h), rate)
+        return min(max(brake, low), high), strongest, None
 
     def _candidates(self, knot: Knot, state: tuple[np.ndarray, np.ndarray, np.ndarray],
                     error: float, h: float, strongest: float

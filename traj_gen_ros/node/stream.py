@@ -87,6 +87,7 @@ class Stream:
         self._published = threading.Condition(self._lock)
         self._last_published_ns = -(2 ** 62)  # when the last setpoint was sampled
         self._sent_ns = -(2 ** 62)  # when the last setpoint sampled is also on the wire
+        self._sent_moving = False  # whether the schedule moved at that setpoint
         self._last_tick_ns = -(2 ** 62)  # the tick (deadline) it was published for
         self._next_tick_ns = now_ns()
         self._waiting = waiting
@@ -214,16 +215,18 @@ class Stream:
         with self._lock:
             return self._last_published_ns
 
-    def last_sent(self) -> int:
+    def last_sent(self) -> tuple[int, bool]:
         """
-        Return when the last setpoint that is already on the wire was sampled (ns).
+        Return when the last setpoint already on the wire was sampled (ns), and if it moved.
 
         At most :meth:`last_published`: a setpoint is sampled under the lock and sent after
         it. An answer judged on this one (an action goal's end) never reaches a client
-        before the setpoint it was judged on has been sent.
+        before the setpoint it was judged on has been sent. Whether the schedule was in
+        motion there is recorded when it was sampled (the speed ramp commits the next tick
+        before it is sent: asked later, the plan time there would be the next tick's).
         """
         with self._lock:
-            return self._sent_ns
+            return self._sent_ns, self._sent_moving
 
     def splice(self, start_ns: int, motion: PlannedMotion, tag: object = None) -> int | None:
         """
@@ -312,6 +315,7 @@ class Stream:
             if now_ns <= self._last_published_ns or self._waiting:
                 return  # the clock has not moved on (simulated time), or nothing to stream
             state = self._schedule.setpoint(now_ns)
+            moving = self._schedule.moving_at(now_ns)
             self._schedule.commit(now_ns)
             factor = self._schedule.factor_at(now_ns) if self._publish_factor else 0.0
             position, velocity = state.position, state.velocity
@@ -332,5 +336,5 @@ class Stream:
             self._forwarded = factor
             self._publish_factor(factor)
         with self._published:
-            self._sent_ns = now_ns
+            self._sent_ns, self._sent_moving = now_ns, moving and finite
             self._published.notify_all()
