@@ -89,16 +89,27 @@ class JointFeedback:
         state, _ = self._stream.start_state(start_ns)
         if self._stream.moving_at(start_ns) or self.measured.deviation(state.position) is None:
             return  # the usual case, without taking the request lock
-        self._requests.hold(self._reseed_if_idle)  # checked again under the lock
+        found = []  # the deviation of the attempt that was spliced in (the last one)
 
-    def _reseed_if_idle(self, state: State, moving: bool) -> np.ndarray | None:
-        """Where to hold: the measured state if idle and beyond the tolerance, else None."""
+        def target(state: State, moving: bool) -> np.ndarray | None:
+            return self._reseed_if_idle(state, moving, found)
+        if self._requests.hold(target):
+            self._logger.warning(self.measured.note_reseed(*found[-1]))  # counted once
+
+    def _reseed_if_idle(self, state: State, moving: bool, found: list
+                        ) -> np.ndarray | None:
+        """
+        Where to hold: the measured state if idle and beyond the tolerance, else None.
+
+        Checked again under the request lock, on every attempt (one that misses its tick
+        under load is made again): the deviation goes to ``found``, counted once held.
+        """
         if moving or np.any(state.velocity):
             return None
         deviation = self.measured.deviation(state.position)
         if deviation is None:
             return None
-        self._logger.warning(self.measured.note_reseed(*deviation))
+        found.append(deviation)
         return self.measured.position.copy()
 
     def hold_where_measured(self, reason: str) -> bool:
