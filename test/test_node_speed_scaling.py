@@ -9,6 +9,7 @@ with the time it was sampled at, so finite differences of its velocities are the
 commanded accelerations whatever the jitter of the stamps.
 """
 
+import contextlib
 import math
 import subprocess
 import sys
@@ -96,15 +97,22 @@ def assert_within_limits(times, velocities):
     assert np.all(np.isfinite(velocities))
 
 
-@pytest.fixture(name='probe')
-def session():
-    with running_node(*ARGS):
+@contextlib.contextmanager
+def speed_session(*ros_args):
+    """Run the node with ``ros_args``; yield a ready :class:`SpeedProbe`."""
+    with running_node(*ros_args):
         probe = SpeedProbe()
         try:
             probe.wait_ready()
             yield probe
         finally:
             probe.destroy_node()
+
+
+@pytest.fixture(name='probe')
+def session():
+    with speed_session(*ARGS) as probe:
+        yield probe
 
 
 def test_half_speed_mid_motion_stretches_the_remaining_time_by_two_less_the_ramp(probe):

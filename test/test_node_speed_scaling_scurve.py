@@ -10,10 +10,10 @@ acceleration and jerk by the mean value theorem, whatever the jitter of the stam
 ``Δv/Δt = a(ξ)`` and ``2 v[t₀, t₁, t₂] = j(ξ)`` (the acceleration is continuous).
 """
 
-from node_harness import running_node, stamp_ns
+from node_harness import stamp_ns
 import numpy as np
 import pytest
-from test_node_speed_scaling import GOAL, SpeedProbe
+from test_node_speed_scaling import GOAL, speed_session
 
 A_MAX, J_MAX = 2.0, 10.0
 ARGS = ('-p', 'profile:=scurve', '-p', 'max_velocity:=[1.0]', '-p', 'max_acceleration:=[2.0]',
@@ -24,13 +24,8 @@ TOLERANCE = 1e-6
 
 @pytest.fixture(name='probe')
 def session():
-    with running_node(*ARGS):
-        probe = SpeedProbe()
-        try:
-            probe.wait_ready()
-            yield probe
-        finally:
-            probe.destroy_node()
+    with speed_session(*ARGS) as probe:
+        yield probe
 
 
 def divided_differences(probe, first):

@@ -10,9 +10,8 @@ from traj_gen_ros.node.motion import held, PlannedMotion
 from traj_gen_ros.node.plan_window import jerk_at, PlanWindow
 from traj_gen_ros.node.planning import plan_stop
 from traj_gen_ros.node.schedule import Schedule
+from traj_gen_ros.node.speed_factor import check_factor, FactorInputs
 from traj_gen_ros.node.speed_scaling import (
-    check_factor,
-    FactorInputs,
     MARGIN,
     rate_bounds,
     TimeMap,

@@ -32,7 +32,7 @@ import struct
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from traj_gen_ros.node.speed_scaling import check_factor, FactorInputs
+from traj_gen_ros.node.speed_factor import check_factor, FactorInputs
 from traj_gen_ros.node.stream import Stream
 
 try:

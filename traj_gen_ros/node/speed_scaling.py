@@ -1,9 +1,9 @@
 """
 The speed override: the factor in force, its ramp, and the map from node time to plan time.
 
-Two inputs set the factor asked for (:class:`FactorInputs`): the ``speed_scaling``
-parameter (the operator's slider) and the ``~/speed_scaling_input`` topic (what the robot
-or a program asks), each in ``[0, 1]``; the factor asked for is their product ``f*``.
+Two inputs set the factor asked for (:mod:`traj_gen_ros.node.speed_factor`): the
+``speed_scaling`` parameter (the operator's slider) and the ``~/speed_scaling_input``
+topic (what the robot or a program asks), each in ``[0, 1]``; their product is ``f*``.
 
 A scaled plan runs on its own time ``τ``, which advances at ``f`` times the node clock
 ``t``: ``dτ/dt = f(t)``. What is commanded from the plan's own position ``p(τ)``,
@@ -46,6 +46,7 @@ import math
 
 import numpy as np
 from traj_gen_ros.node.plan_window import PlanWindow
+from traj_gen_ros.node.speed_factor import check_factor
 from traj_gen_ros.node.speed_ramp import brake_rate, first_feasible
 
 #: The ramp's grid (ns): ``ḟ`` (or ``f̈``) is constant on each step.
@@ -72,54 +73,6 @@ ON_CURVE = 1e-3
 #: The scaled plan in effect at node time ``t`` (ns), as a :class:`PlanWindow`, and its
 #: own time ``τ`` (s) at the plan clock ``P`` (s); None where nothing scaled moves.
 PlanState = Callable[[int, float], tuple[PlanWindow, float] | None]
-
-
-def check_factor(value: object, name: str = 'speed_scaling') -> float:
-    """Return ``value`` as a float in ``[0, 1]``; ``ValueError`` saying why it is not."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f'{name} must be a number in [0, 1], got {value!r}')
-    if not math.isfinite(value):
-        raise ValueError(f'{name} must be finite (a number in [0, 1]), got {value!r}')
-    if not 0.0 <= value <= 1.0:
-        raise ValueError(f'{name} must be in [0, 1] (0 pauses, 1 is full speed), '
-                         f'got {value!r}')
-    return float(value)
-
-
-class FactorInputs:
-    """The two inputs, their product (the factor asked for) and the messages ignored."""
-
-    def __init__(self, parameter: float = 1.0) -> None:
-        """Start with the parameter ``speed_scaling`` and the topic at 1."""
-        self.parameter = check_factor(parameter)
-        self.topic = 1.0
-        self.ignored = 0  # topic messages outside [0, 1] or not finite
-        self.last_ignored = ''
-
-    @property
-    def product(self) -> float:
-        """Return the factor asked for: parameter × topic."""
-        return self.parameter * self.topic
-
-    def take_message(self, value: float) -> str | None:
-        """Take a topic factor; None if taken, else why it is ignored (counted)."""
-        try:
-            self.topic = check_factor(value, '~/speed_scaling_input factor')
-        except ValueError as error:
-            self.ignored += 1
-            self.last_ignored = str(error)
-            return self.last_ignored
-        return None
-
-    def values(self, in_force: float) -> list[tuple[str, str]]:
-        """Give the ``/diagnostics`` key/values: both inputs, the factor in force, the ignored."""
-        values = [('speed_scaling (parameter)', f'{self.parameter:g}'),
-                  ('speed_scaling_input (topic)', f'{self.topic:g}'),
-                  ('speed scaling in force', f'{in_force:.4g}'),
-                  ('speed_scaling_input ignored', str(self.ignored))]
-        if self.last_ignored:
-            values.append(('last speed_scaling_input ignored', self.last_ignored))
-        return values
 
 
 def _interval(base: np.ndarray, bound: np.ndarray, velocity: np.ndarray
