@@ -129,7 +129,7 @@ class Trajectory:
 
         ``(joints,)`` each, never below :meth:`peaks`' values: the largest Bernstein
         coefficient of each piece (:func:`~traj_gen_ros.core.exact.piece_extrema.
-        peak_bounds`), a cheap first check before the exact peaks.
+        peak_bounds`); :meth:`peaks_above` uses them to skip the pieces within a limit.
         """
         return peak_bounds(self._piece_durations(self.joint_count), *self._series(orders))
 

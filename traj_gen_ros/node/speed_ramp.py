@@ -233,15 +233,15 @@ def first_feasible(window: PlanWindow, tau: float, factor: float, rate: float,
     none at all.
     """
     accelerations, jerks = max_acceleration.tolist(), max_jerk.tolist()
-    chunked = not chunked
+    chunk_left = chunked  # the one chunked check of this call is still to be made
     for c, k, _ in candidates:
         row = envelope(tau, factor, rate, c, k, step)
         if row is None:
             continue
         if keeps_limits(window, row, accelerations, jerks):
             return c, k
-        if not chunked:
-            chunked = True
+        if chunk_left:
+            chunk_left = False
             rows, good = _rows(tau, factor, rate, np.array([c]), np.array([k]), step)
             if good[0] and _within(window, rows[0], max_acceleration, max_jerk).all():
                 return c, k

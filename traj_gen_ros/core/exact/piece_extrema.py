@@ -85,8 +85,8 @@ def peak_bounds(durations: np.ndarray, *series: np.ndarray) -> list[np.ndarray]:
     Each piece is split into ``HULL_PARTS`` equal parts first (the bound closes on the
     peak quadratically in the part's length: within about 1 % of it for Craig's profiles'
     pieces), all in one matrix product, no roots: a plan whose bound is within its limits
-    is within them (:func:`~traj_gen_ros.core.kinematic_limits.limit_violation` asks the
-    exact peaks only when it is not).
+    is within them (:func:`peaks_above` finds the exact peaks only of the pieces whose
+    bound is not).
     """
     rows = _unit_rows(durations, series)
     pieces, joints = durations.shape
