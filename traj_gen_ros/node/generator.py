@@ -164,7 +164,7 @@ class TrajectoryGenerator(Node):
             self._request_thread.serve(self.follow_joint_trajectory.action_server)
             self.follow_joint_trajectory.arrival_ns = lambda: self._request_thread.ready_ns
         if self.follow_joint_trajectory is not None and self.feedback is not None:
-            self._wire_measured_state(self.follow_joint_trajectory, self.feedback)
+            self._wire_measured_state(self.follow_joint_trajectory.monitor, self.feedback)
         self.speed_scaling = SpeedScalingInput(self, self._stream, self._requests.dropped)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)

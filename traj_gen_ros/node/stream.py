@@ -20,7 +20,8 @@ fixes the ramp up to it, and a request is planned from the running plan's own st
 planned is not spliced (the request is planned again). :meth:`Stream.plan_elapsed` tells
 how much plan time has passed (an action's feedback and goal-time check).
 
-On a busy machine the thread asks for a real-time priority (``SCHED_FIFO``) and, if that
+The thread is a :class:`~traj_gen_ros.node.ticker.Ticker` (a fixed grid of the node
+clock). On a busy machine it asks for a real-time priority (``SCHED_FIFO``) and, if that
 is not permitted, a lower nice value; if neither is, it runs as it is
 (:func:`traj_gen_ros.node.realtime.raise_priority`). Requests and planning run on the
 request thread: they hold the GIL for at most the interpreter's switch interval at a time
@@ -34,9 +35,9 @@ import threading
 
 import numpy as np
 from traj_gen_ros.node.motion import held, PlannedMotion, State
-from traj_gen_ros.node.realtime import raise_priority
 from traj_gen_ros.node.schedule import Schedule
 from traj_gen_ros.node.speed_scaling import TimeMap
+from traj_gen_ros.node.ticker import Ticker
 from traj_gen_ros.node.wire import float64_multi_array_cdr, joint_names_cdr, joint_state_cdr
 
 #: A factor change waits for a motion spliced to start within this long (ns).
@@ -91,22 +92,17 @@ class Stream:
         self._last_tick_ns = -(2 ** 62)  # the tick (deadline) it was published for
         self._next_tick_ns = now_ns()
         self._waiting = waiting
-        self.stopping = threading.Event()
-        self.priority = 'not started'
-        self._started = threading.Event()
-        self._thread = threading.Thread(target=self._run, name='stream', daemon=True)
+        self._ticker = Ticker(now_ns, period_ns, self._next_deadline, self._publish_tick,
+                              on_error)
+        self.stopping = self._ticker.stopping
 
     def start(self) -> str:
-        """Start the streaming thread; return the priority it got (:func:`raise_priority`)."""
-        self._thread.start()
-        self._started.wait(1.0)
-        return self.priority
+        """Start the streaming thread; return the priority it got (:class:`Ticker`)."""
+        return self._ticker.start()
 
     def stop(self, timeout: float = 2.0) -> None:
         """Ask the thread to end and wait for it (s)."""
-        self.stopping.set()
-        if self._thread.is_alive():
-            self._thread.join(timeout)
+        self._ticker.stop(timeout)
 
     # ------------------------------------------------------------------ executor side
 
@@ -267,46 +263,9 @@ class Stream:
 
     # ------------------------------------------------------------------ stream thread
 
-    def _wait_until(self, deadline_ns: int, period_ns: int) -> bool:
-        """
-        Sleep until ``deadline_ns`` on the node clock; False once the node is closing.
-
-        Waits on an event in steps of at most a period, so a simulated clock that runs
-        faster or slower than the wall clock is followed too.
-        """
-        while True:
-            remaining_ns = deadline_ns - self._now_ns()
-            if remaining_ns <= 0:
-                return not self.stopping.is_set()
-            if self.stopping.wait(min(remaining_ns, period_ns) * 1e-9):
-                return False
-
-    def _run(self) -> None:
-        """
-        Publish the setpoint at every tick of a fixed grid; late ticks are not caught up.
-
-        A tick a period or more late (a stalled machine, a simulated clock that jumps)
-        restarts the grid from now; no two setpoints carry the same stamp.
-        """
-        self.priority = raise_priority()
-        self._started.set()
-        next_ns = self._now_ns()
-        while True:
-            period_ns = self._period_ns()
-            next_ns += period_ns
-            with self._lock:
-                self._next_tick_ns = next_ns
-            if not self._wait_until(next_ns, period_ns):
-                return
-            try:
-                self._publish_tick(next_ns)
-            except Exception as error:  # noqa: BLE001 - the stream outlives any one failure
-                if self.stopping.is_set():
-                    return  # shutting down (SIGINT/SIGTERM): the publisher is gone
-                self._on_error(f'stream: publishing failed: {error!r}')
-            now_ns = self._now_ns()
-            if now_ns - next_ns >= period_ns:
-                next_ns = now_ns
+    def _next_deadline(self, tick_ns: int) -> None:
+        with self._lock:
+            self._next_tick_ns = tick_ns
 
     def _publish_tick(self, tick_ns: int) -> None:
         """Sample the schedule now and publish it as the setpoint of tick ``tick_ns``."""
@@ -329,12 +288,14 @@ class Stream:
             self._last_tick_ns = tick_ns
         if not finite:
             self._on_error('stream: the schedule gave a non-finite setpoint: holding')
-        self._publish(joint_state_cdr(now_ns, self._names_cdr, position, velocity))
-        if self._publish_command is not None:
-            self._publish_command(float64_multi_array_cdr(position))
-        if self._publish_factor is not None and factor != self._forwarded:
-            self._forwarded = factor
-            self._publish_factor(factor)
-        with self._published:
-            self._sent_ns, self._sent_moving = now_ns, moving and finite
-            self._published.notify_all()
+        try:
+            self._publish(joint_state_cdr(now_ns, self._names_cdr, position, velocity))
+            if self._publish_command is not None:
+                self._publish_command(float64_multi_array_cdr(position))
+            if self._publish_factor is not None and factor != self._forwarded:
+                self._forwarded = factor
+                self._publish_factor(factor)
+        finally:  # sent as far as it could be (a failure is logged by the ticker)
+            with self._published:
+                self._sent_ns, self._sent_moving = now_ns, moving and finite
+                self._published.notify_all()
