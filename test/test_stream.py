@@ -78,3 +78,25 @@ def test_a_non_finite_setpoint_is_never_published_the_stream_holds():
         position, velocity = decoded(published[-1])
         assert position.tolist() == [0.1, 0.2] and velocity.tolist() == [0.0, 0.0]
     assert len(errors) == 1 and 'non-finite' in errors[0]
+
+
+def test_a_failed_command_publish_still_marks_the_setpoint_sent():
+    """joint_states went out: an answer waiting on it is not held up by the command's failure."""
+    clock = [10**12]
+    published = []
+
+    def failing(data):
+        raise RuntimeError('command publisher gone')
+    stream = Stream(held([0.1, 0.2]), ['a', 'b'], lambda: clock[0], lambda: PERIOD,
+                    published.append, print, publish_command=failing)
+    deadline = stream.next_start()
+    clock[0] = deadline
+    try:
+        stream._publish_tick(deadline)
+    except RuntimeError as error:
+        assert 'command publisher gone' in str(error)  # the ticker logs it
+    else:
+        raise AssertionError('the failure was swallowed')
+    assert len(published) == 1
+    assert stream.last_sent() == (deadline, False)
+    assert stream.wait_published(deadline, 0.0)
