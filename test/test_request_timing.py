@@ -207,6 +207,44 @@ def test_after_a_warm_miss_the_next_attempt_starts_one_attempt_away(node):
     assert second_attempt <= start - calls[2] <= second_attempt + PERIOD
 
 
+def test_a_cold_miss_replans_from_the_published_setpoint_only_if_a_re_plan_fits(node):
+    # Re-plans of this kind took 0.9 periods: after a cold miss with the next tick only half
+    # a period away, the second attempt plans for the first tick that far, not for the next
+    # one (which it would miss: a third attempt). Before any re-plan, the next tick.
+    rig = Rig(node)
+    rig.tick()
+    goal(rig, [0.5, -0.2], planning_ticks=0)  # a moving arm
+    rig.tick()
+    warm = 9 * PERIOD // 10
+
+    def missed_once(positions):
+        request = parse_goal(JOINTS, JOINTS, positions)
+        calls = []
+
+        def planner(config, state, hold_at, parsed):
+            calls.append((rig.clock[0], state))
+            if len(calls) == 1:
+                rig.tick(late=PERIOD // 2)  # the start tick went out: a miss
+            else:
+                rig.clock[0] += warm  # a warm re-plan, no tick meanwhile
+            return plan_request(config, state, hold_at, parsed)
+        values = rig.answers.values('goal', '', 0)
+        assert rig.handler.execute(Request('goal', values, 0, request), planner)
+        trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
+        return (trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec,
+                calls)
+
+    start, calls = missed_once([-0.3, 0.4])  # no re-plan seen yet
+    assert len(calls) == 2 and start == rig.state(-1)[0]  # from the setpoint published
+    for _ in range(3):
+        rig.tick()
+    start, calls = missed_once([0.3, -0.4])
+    assert len(calls) == 2
+    assert warm <= start - calls[1][0] < warm + PERIOD  # ready for it: no third attempt
+    assert start > rig.state(-1)[0]  # not from the setpoint published while it planned
+    assert np.all(calls[1][1].velocity != 0.0)
+
+
 @pytest.mark.parametrize('due', [SAMPLE_AFTER_FIRST_NS // 2, 4 * SAMPLE_AFTER_FIRST_NS])
 def test_trajectory_is_sampled_after_a_first_setpoint_that_is_due_soon(node, due):
     # Sampling holds the GIL: a first setpoint due within SAMPLE_AFTER_FIRST_NS goes out

@@ -29,12 +29,13 @@ from traj_gen_ros.node.stream import Stream
 #: often the very next tick; with no such request yet, the slowest RECENT of any kind).
 #: One whose start tick the stream published while it was planned is planned again, the
 #: first QUICK_RETRIES times if the attempt took at most RETRY_PERIODS periods: from the
-#: last published setpoint (to take over at the next tick), the second time only when the
-#: next tick is at least the (warm) attempt's time away, else from the first tick that
-#: is. Else, and after that, from a tick further away: twice the time the attempt took,
-#: and at least twice the margin before (a loaded machine whose planning times vary
-#: widely is caught up with), at most PLAN_ATTEMPTS times in all. Margins are capped at
-#: MAX_MARGIN_NS.
+#: last published setpoint (to take over at the next tick) when the next tick is at least
+#: a warm attempt's time away (the first time: the longest of the last RECENT warm
+#: attempts of its kind, if there were any; the second: the attempt just made), else from
+#: the first tick that is. Else, and after that, from a tick further away: twice the time
+#: the attempt took, and at least twice the margin before (a loaded machine whose planning
+#: times vary widely is caught up with), at most PLAN_ATTEMPTS times in all. Margins are
+#: capped at MAX_MARGIN_NS.
 RECENT = 5
 MAX_MARGIN_NS = 500_000_000
 PLAN_ATTEMPTS = 6
@@ -61,6 +62,8 @@ class StartTick:
         # any, took to plan (ns).
         self._recent_ns: dict[tuple[str, str, bool], collections.deque[int]] = {}
         self._any_recent_ns: collections.deque[int] = collections.deque([0], maxlen=RECENT)
+        # How long the last re-plans (warm: every attempt after the first) took (ns).
+        self._warm_ns: dict[tuple[str, str, bool], collections.deque[int]] = {}
 
     def plan_and_splice(self, request: Request, plan: Planner, config: Config
                         ) -> tuple[PlannedMotion, int, int, int] | None:
@@ -71,17 +74,18 @@ class StartTick:
 
         First from the tick at least the recent median planning time away. If the stream
         published it meanwhile, up to ``QUICK_RETRIES`` times: again from the setpoint it
-        published last (a re-plan is faster than a cold first one: usually ready for the
-        next tick; after a warm miss, only if the next tick is that attempt's time away,
-        else from the first tick that is), unless planning took over ``RETRY_PERIODS``
+        published last if the next tick is a warm re-plan's time away (the longest of the
+        recent re-plans of its kind, after a cold miss; the attempt just made, after a
+        warm one), else from the first tick that is, unless planning took over ``RETRY_PERIODS``
         periods (a long path); then, and after that, from a tick at least twice the last
         attempt's time and twice the last margin away.
         """
         # Plans from rest are closed forms; from a moving state they take several times
         # longer: each has its own history.
         moving = self._stream.moving_at(self._stream.next_start())
-        recent_ns = self._recent_ns.setdefault((request.kind, config.profile, moving),
-                                               collections.deque(maxlen=RECENT))
+        key = (request.kind, config.profile, moving)
+        recent_ns = self._recent_ns.setdefault(key, collections.deque(maxlen=RECENT))
+        warm_ns = self._warm_ns.setdefault(key, collections.deque(maxlen=RECENT))
         # Nothing alike yet (the first preempting goal, say): the slowest of any kind.
         margin_ns = int(statistics.median(recent_ns) if recent_ns else max(self._any_recent_ns))
         start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
@@ -106,6 +110,8 @@ class StartTick:
                 self._answers.refused(request, f'internal error: {error}')
                 return None
             elapsed_ns = self._elapsed_ns() - began
+            if attempt > 0:
+                warm_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
             first_ns = self._stream.splice(start_ns, motion, request)
             planning_ns += elapsed_ns
             if first_ns is not None:
@@ -115,13 +121,14 @@ class StartTick:
                 request.values['attempts'] = str(attempt + 1)
                 return motion, now_ns, start_ns, first_ns
             quick = attempt < QUICK_RETRIES and elapsed_ns <= RETRY_PERIODS * config.period_ns
-            if quick and attempt == 0:  # a warm re-plan is faster than this cold attempt
-                start_ns = max(request.stamp_ns, self._stream.last_published())
-            elif quick:  # this one was warm: the next takes about as long
-                if self._stream.next_start() - self._now_ns() >= elapsed_ns:
+            if quick:
+                # A warm re-plan is faster than a cold first attempt; after a warm one,
+                # the next takes about as long.
+                expected_ns = elapsed_ns if attempt > 0 else max(warm_ns, default=0)
+                if self._stream.next_start() - self._now_ns() >= expected_ns:
                     start_ns = max(request.stamp_ns, self._stream.last_published())
                 else:
-                    start_ns = max(request.stamp_ns, self._stream.next_start(elapsed_ns))
+                    start_ns = max(request.stamp_ns, self._stream.next_start(expected_ns))
             else:
                 margin_ns = min(max(2 * elapsed_ns, 2 * margin_ns), MAX_MARGIN_NS)
                 start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
