@@ -229,7 +229,8 @@ def run(rate_hz: float = 500.0, request_hz: float = 1000.0, seconds: float = 10.
         recorder.spin_until(lambda: len(recorder.raw) >= idle_first + int(2 * rate_hz),
                             10.0, 'two idle seconds')
         idle = np.diff(recorder.rows(idle_first)[0]) * 1e-9
-        idle = idle[np.diff(recorder.sequence[idle_first:]) == 1]
+        in_order = np.diff(recorder.sequence[idle_first:]) == 1
+        idle = idle[in_order] if in_order.any() else idle
         rss_before = rss_kib(pid)
         first = len(recorder.raw)
         figures = run_flooder(recorder, 'flood', request_hz, seconds)
@@ -252,7 +253,10 @@ def run(rate_hz: float = 500.0, request_hz: float = 1000.0, seconds: float = 10.
     steps = np.diff(stamps)
     # The node's period: between setpoints published one after the other (a sample that a
     # starved recorder lost in transport is not a late tick).
-    during = steps[window[1:] & window[:-1] & (sequence == 1)]
+    consecutive = sequence == 1
+    if not consecutive.any():  # an RMW without publication sequence numbers
+        consecutive[:], sequence = True, np.ones_like(sequence)
+    during = steps[window[1:] & window[:-1] & consecutive]
     published = int(sequence[window[1:] & window[:-1]].sum())
     position_step = (np.abs(np.diff(q, axis=0)) / (MAX_VELOCITY * steps[:, None])).max()
     velocity_step = (np.abs(np.diff(v, axis=0)) / (MAX_ACCELERATION * steps[:, None])).max()

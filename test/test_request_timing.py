@@ -208,16 +208,17 @@ def test_after_a_warm_miss_the_next_attempt_starts_one_attempt_away(node):
 
 
 def test_a_cold_miss_replans_from_the_published_setpoint_only_if_a_re_plan_fits(node):
-    # Re-plans of this kind took 0.9 periods: after a cold miss with the next tick only half
-    # a period away, the second attempt plans for the first tick that far, not for the next
-    # one (which it would miss: a third attempt). Before any re-plan, the next tick.
+    # Re-plans of this kind took up to 0.9 periods: after a cold miss with the next tick
+    # only half a period away, the second attempt plans for the first tick that far, not
+    # for the next one (which it would miss: a third attempt). Before any re-plan, the
+    # next tick. The longest of the recent re-plans counts, not the last.
     rig = Rig(node)
     rig.tick()
     goal(rig, [0.5, -0.2], planning_ticks=0)  # a moving arm
     rig.tick()
     warm = 9 * PERIOD // 10
 
-    def missed_once(positions):
+    def missed_once(positions, replan_ns=warm):
         request = parse_goal(JOINTS, JOINTS, positions)
         calls = []
 
@@ -226,7 +227,7 @@ def test_a_cold_miss_replans_from_the_published_setpoint_only_if_a_re_plan_fits(
             if len(calls) == 1:
                 rig.tick(late=PERIOD // 2)  # the start tick went out: a miss
             else:
-                rig.clock[0] += warm  # a warm re-plan, no tick meanwhile
+                rig.clock[0] += replan_ns  # a warm re-plan, no tick meanwhile
             return plan_request(config, state, hold_at, parsed)
         values = rig.answers.values('goal', '', 0)
         assert rig.handler.execute(Request('goal', values, 0, request), planner)
@@ -236,13 +237,50 @@ def test_a_cold_miss_replans_from_the_published_setpoint_only_if_a_re_plan_fits(
 
     start, calls = missed_once([-0.3, 0.4])  # no re-plan seen yet
     assert len(calls) == 2 and start == rig.state(-1)[0]  # from the setpoint published
-    for _ in range(3):
+    for replan_ns in (PERIOD // 5, PERIOD // 5):  # the 0.9-period one is still recent
+        for _ in range(3):
+            rig.tick()
+        start, calls = missed_once([0.3, -0.4], replan_ns)
+        assert len(calls) == 2
+        assert warm <= start - calls[1][0] < warm + PERIOD  # ready for it: no third attempt
+        assert start > rig.state(-1)[0]  # not from the setpoint published while planned
+        assert np.all(calls[1][1].velocity != 0.0)
+
+
+def test_a_re_plan_after_a_long_first_attempt_is_not_taken_for_a_quick_one(node):
+    # A first attempt of 3 periods (a long path) is retried from a tick further away; that
+    # re-plan (0.6 periods) is not what a quick miss can expect: the next cold miss, with
+    # the next tick half a period away, still plans from the setpoint published.
+    rig = Rig(node)
+    rig.tick()
+    goal(rig, [0.5, -0.2], planning_ticks=0)  # a moving arm
+    rig.tick()
+
+    def two_attempts(positions, first):
+        request = parse_goal(JOINTS, JOINTS, positions)
+        calls = []
+
+        def planner(config, state, hold_at, parsed):
+            calls.append(rig.clock[0])
+            if len(calls) == 1:
+                first()
+            else:
+                rig.clock[0] += 6 * PERIOD // 10  # a re-plan, no tick meanwhile
+            return plan_request(config, state, hold_at, parsed)
+        values = rig.answers.values('goal', '', 0)
+        assert rig.handler.execute(Request('goal', values, 0, request), planner)
+        assert len(calls) == 2
+        trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
+        return trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec
+
+    def long_path():
+        for late in (0, 0, 30_000):
+            rig.tick(late=late)
+    start = two_attempts([-0.3, 0.4], long_path)
+    assert start - rig.state(-1)[0] >= 5 * PERIOD  # twice the long attempt's time away
+    while rig.state(-1)[0] < start:
         rig.tick()
-    start, calls = missed_once([0.3, -0.4])
-    assert len(calls) == 2
-    assert warm <= start - calls[1][0] < warm + PERIOD  # ready for it: no third attempt
-    assert start > rig.state(-1)[0]  # not from the setpoint published while it planned
-    assert np.all(calls[1][1].velocity != 0.0)
+    assert two_attempts([0.3, -0.4], lambda: rig.tick(late=PERIOD // 2)) == rig.state(-1)[0]
 
 
 @pytest.mark.parametrize('due', [SAMPLE_AFTER_FIRST_NS // 2, 4 * SAMPLE_AFTER_FIRST_NS])

@@ -30,8 +30,8 @@ from traj_gen_ros.node.stream import Stream
 #: One whose start tick the stream published while it was planned is planned again, the
 #: first QUICK_RETRIES times if the attempt took at most RETRY_PERIODS periods: from the
 #: last published setpoint (to take over at the next tick) when the next tick is at least
-#: a warm attempt's time away (the first time: the longest of the last RECENT warm
-#: attempts of its kind, if there were any; the second: the attempt just made), else from
+#: a warm attempt's time away (the first time: the longest of the last RECENT such
+#: re-plans of its kind, if there were any; the second: the attempt just made), else from
 #: the first tick that is. Else, and after that, from a tick further away: twice the time
 #: the attempt took, and at least twice the margin before (a loaded machine whose planning
 #: times vary widely is caught up with), at most PLAN_ATTEMPTS times in all. Margins are
@@ -62,7 +62,7 @@ class StartTick:
         # any, took to plan (ns).
         self._recent_ns: dict[tuple[str, str, bool], collections.deque[int]] = {}
         self._any_recent_ns: collections.deque[int] = collections.deque([0], maxlen=RECENT)
-        # How long the last re-plans (warm: every attempt after the first) took (ns).
+        # How long the last re-plans after a quick miss (warm) took (ns).
         self._warm_ns: dict[tuple[str, str, bool], collections.deque[int]] = {}
 
     def plan_and_splice(self, request: Request, plan: Planner, config: Config
@@ -90,6 +90,7 @@ class StartTick:
         margin_ns = int(statistics.median(recent_ns) if recent_ns else max(self._any_recent_ns))
         start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
         planning_ns = 0
+        quick = False  # whether this attempt follows a quick miss
         for attempt in range(PLAN_ATTEMPTS):
             began = self._elapsed_ns()
             now_ns = self._now_ns()
@@ -110,8 +111,8 @@ class StartTick:
                 self._answers.refused(request, f'internal error: {error}')
                 return None
             elapsed_ns = self._elapsed_ns() - began
-            if attempt > 0:
-                warm_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
+            if quick:  # a re-plan after a quick miss: what the next cold miss expects
+                warm_ns.append(min(elapsed_ns, RETRY_PERIODS * config.period_ns))
             first_ns = self._stream.splice(start_ns, motion, request)
             planning_ns += elapsed_ns
             if first_ns is not None:

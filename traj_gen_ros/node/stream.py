@@ -288,14 +288,14 @@ class Stream:
             self._last_tick_ns = tick_ns
         if not finite:
             self._on_error('stream: the schedule gave a non-finite setpoint: holding')
+        self._publish(joint_state_cdr(now_ns, self._names_cdr, position, velocity))
         try:
-            self._publish(joint_state_cdr(now_ns, self._names_cdr, position, velocity))
             if self._publish_command is not None:
                 self._publish_command(float64_multi_array_cdr(position))
             if self._publish_factor is not None and factor != self._forwarded:
                 self._forwarded = factor
                 self._publish_factor(factor)
-        finally:  # sent as far as it could be (a failure is logged by the ticker)
+        finally:  # joint_states is out (a failure after it is logged by the ticker)
             with self._published:
                 self._sent_ns, self._sent_moving = now_ns, moving and finite
                 self._published.notify_all()
