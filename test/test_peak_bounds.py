@@ -1,6 +1,6 @@
 """The Bernstein bounds of a plan's peaks: never below the exact peaks, and close to them."""
 
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 import numpy as np
 from traj_gen_ros import cubic, limit_violation, quintic_via
@@ -25,6 +25,9 @@ def test_a_bound_is_never_below_the_exact_peak(rows, lengths, size):
 @given(st.lists(st.lists(coefficient, min_size=5, max_size=5), min_size=2, max_size=12),
        st.lists(st.floats(1e-3, 10.0), min_size=12, max_size=12), st.integers(1, 5),
        st.floats(0.0, 1.5))
+@example(rows=[[0.0] * 5] * 6 + [[0.0, 0.0, 0.0, 0.0, 1.0], [0.0, 1.0, -3.86332644153686e-209,
+                                                            0.0, 0.0]],
+         lengths=[1.0] * 12, size=5, share=0.0)  # a subnormal p·r in the cubic formula
 def test_peaks_above_a_limit_are_the_exact_peaks_and_within_it_bound_them(
         rows, lengths, size, share):
     """Roots only where a bound exceeds: above the limit exact, within it never below."""

@@ -117,7 +117,10 @@ def _cubic_roots(cubics: np.ndarray) -> np.ndarray:
     root = np.sqrt(np.maximum(discriminant, 0.0))
     one = np.cbrt(-0.5 * q + root) + np.cbrt(-0.5 * q - root)
     radius = 2.0 * np.sqrt(np.maximum(-p / 3.0, 0.0))
-    cosine = 3.0 * q / np.where(radius * p == 0.0, np.inf, p * radius)
+    # Within [-1, 1] where the three real roots are taken (Δ ≤ 0); it overflows only for a
+    # subnormal p·r with Δ > 0, where Cardano's root is taken: clipped, either way unused.
+    with np.errstate(over='ignore'):
+        cosine = 3.0 * q / np.where(radius * p == 0.0, np.inf, p * radius)
     angle = np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0)) / 3.0
     three = radius[:, None] * np.cos(angle[:, None] - _THIRDS)
     roots = np.where((discriminant > 0.0)[:, None], one[:, None], three) - a[:, None] / 3.0
