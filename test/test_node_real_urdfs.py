@@ -80,7 +80,8 @@ def test_a_start_outside_the_range_warns_and_only_goals_further_out_are_refused(
         values = diagnostic(probe, lambda v: 'outside range' in v)
         assert values['level'] == DiagnosticStatus.WARN
         assert values['outside range'] == outside
-        assert values[''].startswith(outside)
+        # One of the summary's parts (a loaded machine may add a stream-rate warning).
+        assert values[''].startswith(outside) or f'; {outside}' in values['']
 
         # Other joints move while it holds at 0.
         status, plan = probe.goal({'lbr_iiwa_joint_2': 0.5})

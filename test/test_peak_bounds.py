@@ -21,13 +21,15 @@ def test_a_bound_is_never_below_the_exact_peak(rows, lengths, size):
     assert bound >= peak * (1.0 - 1e-12) - 1e-12
 
 
+SUBNORMAL_PR = [[0.0] * 5] * 6 + [[0.0, 0.0, 0.0, 0.0, 1.0],
+                                  [0.0, 1.0, -3.86332644153686e-209, 0.0, 0.0]]
+
+
 @settings(max_examples=300, deadline=None)
 @given(st.lists(st.lists(coefficient, min_size=5, max_size=5), min_size=2, max_size=12),
        st.lists(st.floats(1e-3, 10.0), min_size=12, max_size=12), st.integers(1, 5),
        st.floats(0.0, 1.5))
-@example(rows=[[0.0] * 5] * 6 + [[0.0, 0.0, 0.0, 0.0, 1.0], [0.0, 1.0, -3.86332644153686e-209,
-                                                            0.0, 0.0]],
-         lengths=[1.0] * 12, size=5, share=0.0)  # a subnormal p·r in the cubic formula
+@example(rows=SUBNORMAL_PR, lengths=[1.0] * 12, size=5, share=0.0)  # a subnormal p·r
 def test_peaks_above_a_limit_are_the_exact_peaks_and_within_it_bound_them(
         rows, lengths, size, share):
     """Roots only where a bound exceeds: above the limit exact, within it never below."""
