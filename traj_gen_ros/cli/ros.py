@@ -83,7 +83,7 @@ def goal_from_args(items: list[str], degrees: bool) -> tuple[list[str], list[flo
     Read ``traj-gen goal``'s ``JOINT=POSITION`` words into names and positions (rad).
 
     The command line's side only; the node reads the message it gets with
-    :func:`traj_gen_ros.node.parsing.parse_goal`.
+    :func:`traj_gen_ros.node.messages.parsing.parse_goal`.
     """
     names, positions = [], []
     scale = math.radians(1.0) if degrees else 1.0

@@ -4,19 +4,20 @@ The ``trajectory_generator`` node: plans from its current setpoint and streams i
 A thin ROS layer: this module declares the parameters and creates the subscriptions, the
 service and the publishers; the work is done by
 
-* :mod:`traj_gen_ros.node.request_handler`: a request from its callback to the stream, in the
-  order parse (:mod:`~traj_gen_ros.node.parsing`) → validate and plan
-  (:mod:`~traj_gen_ros.node.planning`) → sample → splice into the schedule;
-* :mod:`traj_gen_ros.node.request_thread`: the thread that waits on ``~/goal`` and
+* :mod:`traj_gen_ros.node.requests.handler`: a request from its callback to the stream, in the
+  order parse (:mod:`~traj_gen_ros.node.messages.parsing`) → validate and plan
+  (:mod:`~traj_gen_ros.node.planning.pipeline`) → sample → splice into the schedule;
+* :mod:`traj_gen_ros.node.requests.thread`: the thread that waits on ``~/goal`` and
   ``~/via_points`` alone and runs their callbacks (the executor serves the rest);
-* :mod:`traj_gen_ros.node.stream`: the thread that publishes the schedule's setpoint
-  (:mod:`~traj_gen_ros.node.schedule`) every period;
-* :mod:`traj_gen_ros.node.answers`: ``~/status`` and ``~/trajectory``;
-* :mod:`traj_gen_ros.node.config`: parameters → a validated ``Config``;
-  :mod:`~traj_gen_ros.node.parameters` declares them, statically typed;
-* :mod:`traj_gen_ros.node.robot_description`: the URDF and ``min_position``/``max_position`` → the
+* :mod:`traj_gen_ros.node.stream.stream`: the thread that publishes the schedule's setpoint
+  (:mod:`~traj_gen_ros.node.stream.schedule`) every period;
+* :mod:`traj_gen_ros.node.requests.answers`: ``~/status`` and ``~/trajectory``;
+* :mod:`traj_gen_ros.node.settings.config`: parameters → a validated ``Config``;
+  :mod:`~traj_gen_ros.node.settings.parameters` declares them, statically typed;
+* :mod:`traj_gen_ros.node.description.robot_description`: the URDF and
+  ``min_position``/``max_position`` → the
   limits in force (``Config.limits``);
-* :mod:`traj_gen_ros.node.diagnostics_publisher`: ``/diagnostics`` about once a second.
+* :mod:`traj_gen_ros.node.diagnostics.publisher`: ``/diagnostics`` about once a second.
 
 Interface (all names relative, so namespaces and remapping work):
 
@@ -28,18 +29,19 @@ Interface (all names relative, so namespaces and remapping work):
 * ``~/stop`` (``std_srvs/Trigger``): brake within ``max_acceleration`` (and ``max_jerk``
   with profile ``scurve``) and hold.
 * ``~/follow_joint_trajectory`` (``control_msgs/action/FollowJointTrajectory``), where
-  control_msgs is importable: :mod:`traj_gen_ros.node.follow_joint_trajectory`.
+  control_msgs is importable: :mod:`traj_gen_ros.node.action.server`.
 * ``robot_description`` (``std_msgs/String``, transient local): the robot's URDF, in.
 * ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): the node's health, about 1 Hz.
 * ``joint_topic`` (``sensor_msgs/JointState``, best effort): the measured state, in
-  (:mod:`~traj_gen_ros.node.joint_feedback`); ``command_out_topic``
+  (:mod:`~traj_gen_ros.node.robot.joint_feedback`); ``command_out_topic``
   (``std_msgs/Float64MultiArray`` every tick, or ``trajectory_msgs/JointTrajectory`` per
-  plan: :mod:`~traj_gen_ros.node.commands_out`), out.
+  plan: :mod:`~traj_gen_ros.node.robot.commands_out`), out.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+import dataclasses
 import gc
 import os
 import signal
@@ -59,32 +61,34 @@ from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
-from traj_gen_ros.node.commands_out import (
+from traj_gen_ros.node.action.server import create_server
+from traj_gen_ros.node.description.robot_description import NodeLimits
+from traj_gen_ros.node.diagnostics.publisher import CountingAnswers, NodeDiagnostics
+from traj_gen_ros.node.diagnostics.status import RateMeter
+from traj_gen_ros.node.messages.wire import joint_trajectory_cdr
+from traj_gen_ros.node.planning.motion import held, PlannedMotion
+from traj_gen_ros.node.requests.handler import REQUEST_DEPTH, RequestHandler
+from traj_gen_ros.node.requests.thread import NotForTheExecutor, RequestThread
+from traj_gen_ros.node.robot.commands_out import controller_points
+from traj_gen_ros.node.robot.joint_feedback import JointFeedback
+from traj_gen_ros.node.robot.measured_state import MeasuredState
+from traj_gen_ros.node.settings.config import (
     check_command_out_type,
-    controller_points,
+    Config,
     FLOAT64_MULTI_ARRAY,
+    initial_state,
+    make_config,
 )
-from traj_gen_ros.node.config import Config, initial_state, make_config
-from traj_gen_ros.node.diagnostics import RateMeter
-from traj_gen_ros.node.diagnostics_publisher import CountingAnswers, NodeDiagnostics
-from traj_gen_ros.node.follow_joint_trajectory import create_server
-from traj_gen_ros.node.joint_feedback import JointFeedback
-from traj_gen_ros.node.measured_state import MeasuredState
-from traj_gen_ros.node.motion import held, PlannedMotion
-from traj_gen_ros.node.parameters import declare_parameters
-from traj_gen_ros.node.realtime import (
+from traj_gen_ros.node.settings.parameters import declare_parameters
+from traj_gen_ros.node.speed.input import SpeedScalingInput
+from traj_gen_ros.node.speed.time_map import TimeMap
+from traj_gen_ros.node.stream.realtime import (
     choose_priority,
     EXECUTOR_FIFO_PRIORITY,
     favour_calling_thread,
     realtime_calling_thread,
 )
-from traj_gen_ros.node.request_handler import REQUEST_DEPTH, RequestHandler
-from traj_gen_ros.node.request_thread import NotForTheExecutor, RequestThread
-from traj_gen_ros.node.robot_description import NodeLimits
-from traj_gen_ros.node.speed_input import SpeedScalingInput
-from traj_gen_ros.node.speed_scaling import TimeMap
-from traj_gen_ros.node.stream import Stream
-from traj_gen_ros.node.wire import joint_trajectory_cdr
+from traj_gen_ros.node.stream.stream import Stream
 from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
@@ -120,7 +124,7 @@ class TrajectoryGenerator(Node):
                     if command_topic else None)
         self._node_clock = self.get_clock()  # ROS time: use_sim_time makes it follow /clock
         self._rate_meter = RateMeter(self._now_ns() * 1e-9)  # for /diagnostics
-        # Speed scaling: the plan clock (node/speed_scaling.py), its inputs (speed_input.py).
+        # Speed scaling: the plan clock (node/speed/time_map.py), its inputs (speed_input.py).
         self._time_map = TimeMap(self._config.max_acceleration, self._config.jerk_limit,
                                  origin_ns=self._now_ns())
         self._stream = Stream(held(initial), self._config.joints, self._now_ns,
@@ -261,7 +265,10 @@ class TrajectoryGenerator(Node):
         return {name: self.get_parameter(name).value for name in CONFIG_PARAMETERS}
 
     def _read_config(self) -> Config:
-        return self._limits.apply(make_config(**self._parameter_values()))
+        config = make_config(**self._parameter_values())
+        limits = self._limits.in_force(config.max_velocity)
+        return dataclasses.replace(config, max_velocity=np.array(limits.velocity),
+                                   limits=limits)
 
     def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         values = self._parameter_values()

@@ -14,7 +14,7 @@ extremum enters at an end (``∂P/∂τ = 0`` there), or at an interior extremum
 ``P = ∂P/∂τ = 0`` together, whose resultant in ``T`` (the Sylvester determinant) is a
 polynomial in ``τ``. Those resultants, divided by their known factors, are linear in a
 few products of the inputs; the tables below hold their ascending coefficients in ``τ``
-(derived symbolically; ``test/test_polynomial_candidates.py`` rebuilds them from the
+(derived symbolically; ``test/core/test_polynomial_candidates.py`` rebuilds them from the
 definition). Their roots in ``[0, 1]`` (:mod:`traj_gen_ros.core.exact.unit_roots`) give ``τ``, and
 ``P(τ, T) = 0`` gives the durations. Units: rad, rad/s, rad/s², s.
 """

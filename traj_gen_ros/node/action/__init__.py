@@ -1,0 +1,1 @@
+"""FollowJointTrajectory: the goal read and planned, watched and ended."""

@@ -1,0 +1,1 @@
+"""/diagnostics: what the node reports and its publisher."""

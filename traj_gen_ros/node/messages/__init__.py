@@ -1,0 +1,1 @@
+"""What the node reads off and writes onto the wire: CDR bytes, request fields."""

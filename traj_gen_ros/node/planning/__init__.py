@@ -1,0 +1,1 @@
+"""One planning pipeline for every request: check, unwrap, plan, check."""

@@ -1,0 +1,51 @@
+"""
+What the node's layers hand each other: a setpoint (:class:`State`) and an accepted plan.
+
+A :class:`PlannedMotion` is a plan of the core (a ``Trajectory`` in local time from its
+start) with where it ends at rest and the words its status reports: planning makes them,
+the schedule runs them, the stream samples them into a :class:`State` per tick, and the
+answers and diagnostics report them. No ROS here.
+
+Units: rad (or m), rad/s, rad/s².
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from traj_gen_ros.core.timing import hold
+from traj_gen_ros.core.trajectory import Trajectory
+
+
+class State(NamedTuple):
+    """A setpoint: position (rad), velocity (rad/s) and acceleration (rad/s²) per joint."""
+
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+
+
+@dataclass(frozen=True)
+class PlannedMotion:
+    """
+    An accepted plan, where it ends (rad, at rest) and the words its status reports.
+
+    ``unscaled``: the plan runs on the node clock whatever the speed scaling factor
+    (``~/stop``, an action cancel: braking at full authority); every other plan's own
+    time advances at the factor (:mod:`traj_gen_ros.node.speed.time_map`).
+    """
+
+    plan: Trajectory
+    profile: str
+    end: np.ndarray
+    note: str = ''
+    unscaled: bool = False
+
+
+def held(position: Sequence[float], profile: str = 'hold', note: str = '') -> PlannedMotion:
+    """Stand still at ``position`` (rad): a zero-duration plan."""
+    position = np.array(position, dtype=float)
+    return PlannedMotion(hold(position), profile, position, note)

@@ -1,0 +1,1 @@
+"""A request from its subscription to its answer: thread, handler, start tick."""

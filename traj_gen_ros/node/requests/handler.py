@@ -1,0 +1,330 @@
+"""
+A request from its callback to the stream, in the six steps of docs/node-design.md.
+
+The goal and via-point callbacks run on the request thread
+(:mod:`traj_gen_ros.node.requests.thread`), ``~/stop`` on the executor's; a lock lets one
+request through at a time.
+
+1. *take* (:meth:`RequestHandler.take`): the request that woke the callback and every
+   request waiting behind it (a burst is drained in one callback: only the newest runs);
+2. *parse* (:func:`goal_request`, :func:`via_request`; :mod:`traj_gen_ros.node.messages.parsing`,
+   the bytes read by :mod:`traj_gen_ros.node.messages.wire`): a malformed one is refused at once;
+   the older valid ones are answered "superseded";
+3. *validate and plan* the newest (:data:`Planner`: :func:`plan_request` of
+   :mod:`traj_gen_ros.node.planning.pipeline`, or :func:`brake_planner` for ``~/stop``) from the
+   schedule's setpoint at the start: the stream's next tick not yet published (or the
+   request's future ``header.stamp``), refusing with a reason;
+4. *splice* it into the schedule at the start (:meth:`Stream.splice`);
+5. the stream thread *publishes* its first setpoint at that tick
+   (:mod:`traj_gen_ros.node.stream.stream`);
+6. *sample* the plan for ``~/trajectory`` from its start and publish it, then the OK
+   status once the stream has published that setpoint (a client reading the answer sees
+   it started; a delayed start is answered at once) (:mod:`traj_gen_ros.node.requests.answers`).
+
+Sampling comes after the splice so that it does not delay the start (a plan that reaches
+the splice has finite coefficients and finite, checked peaks, so its samples are finite),
+and after the first setpoint when that is due within ``SAMPLE_AFTER_FIRST_NS``, so that it
+does not hold the GIL while the stream thread publishes it.
+
+The start tick is the first one at least the median planning time of the last requests
+alike (kind, profile, and from rest or a moving state) away (so the plan is usually ready
+by then). If the stream published it while the request was being planned anyway (a cold
+cache, a long path, a loaded machine), the request is
+planned again from the setpoint the stream published last, exactly as published, and
+takes over at the next tick if ready by then: one period later, not a re-plan far ahead.
+After ``PLAN_ATTEMPTS`` such misses it is refused.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+import threading
+import time
+
+from diagnostic_msgs.msg import DiagnosticStatus
+import numpy as np
+from rclpy.serialization import deserialize_message
+from rclpy.subscription import Subscription
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from traj_gen_ros.node.messages.parsing import (
+    MAX_VIA_POINTS,
+    parse_goal,
+    parse_via,
+    RequestError,
+    seconds,
+    too_many_points,
+)
+from traj_gen_ros.node.messages.wire import peek_via_points, read_goal
+from traj_gen_ros.node.planning.motion import held, PlannedMotion, State
+from traj_gen_ros.node.planning.pipeline import plan_request, plan_stop
+from traj_gen_ros.node.requests.answers import Answers, Request
+from traj_gen_ros.node.requests.start_tick import PLAN_ATTEMPTS, Planner, StartTick
+from traj_gen_ros.node.settings.config import Config
+from traj_gen_ros.node.stream.stream import Stream
+from trajectory_msgs.msg import JointTrajectory
+
+#: Depth of the request subscriptions: a burst while the executor is busy is kept.
+REQUEST_DEPTH = 1000
+#: Rounds of request callbacks closer than this (s) are spaced out to it: under a flood
+#: the next round then drains a batch at once, so the executor thread holds the GIL less
+#: and the stream keeps its rate. A request after a quiet spell is not delayed.
+REQUEST_ROUND_PERIOD = 0.005
+#: The OK status waits at most this long (s) for the motion's first setpoint.
+ANSWER_WAIT = 0.1
+#: A motion whose first setpoint is due within this long (ns) is sampled for
+#: ``~/trajectory`` only once the stream has published that setpoint: sampling holds the
+#: GIL, which the stream thread needs at that tick (it went out 0.17 ms p50, 0.44 ms at
+#: worst after its tick when they overlapped, against 0.09 and 0.11 ms otherwise).
+SAMPLE_AFTER_FIRST_NS = 1_500_000
+
+
+class RequestHandler:
+    """Take requests off the subscriptions, plan the newest, splice it into the stream."""
+
+    def __init__(self, config: Callable[[], Config], stream: Stream, answers: Answers,
+                 now_ns: Callable[[], int], log_error: Callable[[str], None],
+                 elapsed_ns: Callable[[], int] = time.perf_counter_ns, *,
+                 refusal: Callable[[], str | None] = lambda: None,
+                 on_plan: Callable[[int, PlannedMotion], None] = lambda start_ns, motion: None
+                 ) -> None:
+        """
+        Handle requests with the current ``config()``, on the node clock ``now_ns()``.
+
+        ``elapsed_ns`` times the planning (ns; a test gives its fake clock). ``refusal()``
+        gives a reason to refuse every request now (no measured state), or ``None``.
+        ``on_plan(start_ns, motion)`` is told every motion spliced in (requests, holds,
+        brakes), e.g. for the ``JointTrajectory`` command output.
+        """
+        self._elapsed_ns = elapsed_ns
+        self._refusal = refusal
+        self._on_plan = on_plan
+        self._config = config
+        self._stream = stream
+        self._answers = answers
+        self._now_ns = now_ns
+        self._log_error = log_error
+        self._last_round = 0.0  # time.monotonic() at the end of the last request callback
+        # Requests come from the request thread and ~/stop from the executor: one at a time.
+        self._lock = threading.Lock()
+        self._start_tick = StartTick(stream, answers, now_ns, log_error, elapsed_ns)
+        #: Called with each request spliced in and its start (ns), before it is answered:
+        #: ``~/follow_joint_trajectory`` ends the goal a newer request replaced.
+        self.on_accepted: Callable[[Request, int], None] = lambda request, start_ns: None
+        #: Called with each accepted request dropped before its start and why, after it
+        #: is answered: ``~/follow_joint_trajectory`` aborts its goal.
+        self.on_dropped: Callable[[Request, str], None] = lambda request, reason: None
+
+    # ------------------------------------------------------------------ take and parse
+
+    def take(self, subscription: Subscription, message_type: type,
+             first: tuple[bytes, dict]) -> None:
+        """
+        Parse ``first`` and every request waiting behind it; execute the newest valid one.
+
+        Each is a ``(serialised message, message info)`` pair (the subscriptions are raw:
+        goals are read off the wire, via points counted before they are deserialised); the
+        info's ``received_timestamp`` (ns, system clock: when DDS received it) goes into
+        the answer as ``received``.
+        """
+        parse = via_request if message_type is JointTrajectory else goal_request
+        try:
+            with self._lock:
+                self._take_newest(subscription, message_type, first, parse)
+        finally:
+            self._pace()
+
+    def _take_newest(self, subscription: Subscription, message_type: type,
+                     first: tuple[bytes, dict],
+                     parse: Callable[[bytes, int, Sequence[str], Answers], Request | None]
+                     ) -> None:
+        """Drain the subscription after ``first``; execute the newest valid request."""
+        waiting = [first]
+        with subscription.handle:
+            for _ in range(REQUEST_DEPTH):
+                taken = subscription.handle.take_message(message_type, True)
+                if taken is None:
+                    break
+                waiting.append(taken)
+        joints = self._config().joints
+        parsed = [parse(message, info.get('received_timestamp', 0), joints, self._answers)
+                  for message, info in waiting]
+        parsed = [request for request in parsed if request is not None]
+        if parsed:
+            self._answers.superseded(parsed[:-1])
+            newest = parsed[-1]
+            self.execute(newest, plan_request)
+
+    def _pace(self) -> None:
+        """End a request callback no sooner than ``REQUEST_ROUND_PERIOD`` after the last one."""
+        rest = self._last_round + REQUEST_ROUND_PERIOD - time.monotonic()
+        if rest > 0.0:
+            time.sleep(rest)
+        self._last_round = time.monotonic()
+
+    # ------------------------------------------------------------------ plan and splice
+
+    def execute(self, request: Request, plan: Planner) -> PlannedMotion | None:
+        """
+        Plan ``request`` from the stream's next tick, splice it in, sample it, answer it.
+
+        Returns the motion spliced in, or ``None`` when it was refused (answered ERROR).
+        """
+        config = self._config()
+        reason = self._refusal()
+        if reason is not None:
+            self._answers.refused(request, reason)
+            return None
+        placed = self._start_tick.plan_and_splice(request, plan, config)
+        if placed is None:
+            return None
+        motion, now_ns, start_ns, first_ns = placed
+        self._on_plan(start_ns, motion)
+        self.on_accepted(request, start_ns)
+        waited = first_ns - self._now_ns() <= SAMPLE_AFTER_FIRST_NS
+        if waited:
+            self._stream.wait_published(first_ns, ANSWER_WAIT)
+        try:
+            message = self._answers.trajectory(start_ns, motion, config.rate_hz)
+        except Exception as error:  # noqa: BLE001 - checked plans are finite: a bug if not
+            self._log_error(f'sampling an accepted {request.kind} failed: {error!r}; braking')
+            self._brake(config)
+            self._answers.refused(request, f'internal error: {error}')
+            return None
+        self._answers.publish_trajectory(message)
+        if not waited and first_ns - now_ns <= ANSWER_WAIT * 1e9:
+            self._stream.wait_published(first_ns, ANSWER_WAIT)
+        self._answers.accepted(request, motion, now_ns, first_ns)
+        return motion
+
+    def submit(self, request: Request, plan: Planner) -> PlannedMotion | None:
+        """:meth:`execute`, one request at a time with the others (for the action server)."""
+        with self._lock:
+            return self.execute(request, plan)
+
+    def dropped(self, requests: Sequence[object], reason: str) -> None:
+        """
+        Answer accepted requests the stream dropped before their start: ERROR, ``reason``.
+
+        Under the request lock, so the answer follows the request's own OK. Tags that are
+        not a :class:`Request` (holds, brakes) are skipped.
+        """
+        with self._lock:
+            for request in requests:
+                if isinstance(request, Request):
+                    self._answers.report(DiagnosticStatus.ERROR,
+                                         f'{request.kind} dropped: {reason}', request.values)
+                    self.on_dropped(request, reason)
+
+    def _brake(self, config: Config) -> None:
+        """Brake from the next tick (after a failure, or when the measured state is lost)."""
+        for _ in range(PLAN_ATTEMPTS):
+            start_ns = self._stream.next_start()
+            state, _ = self._stream.start_state(start_ns, scaled=False)
+            try:
+                motion = plan_stop(config, state)
+            except ValueError as error:  # a non-finite state: the stream holds its last
+                self._log_error(f'braking failed: {error!r}')
+                return
+            if self._stream.splice(start_ns, motion) is not None:
+                self._on_plan(start_ns, motion)
+                return
+
+    def brake(self) -> None:
+        """Brake within the limits from the next tick and hold (no answer: no request)."""
+        with self._lock:
+            self._brake(self._config())
+
+    def hold(self, target: Callable[[State, bool], np.ndarray | None]) -> bool:
+        """
+        Hold from the next tick where ``target(state there, moving)`` says (rad), if it does.
+
+        The measured state re-seeds the setpoint so: one step to that position at the
+        tick, then at rest there. ``target`` runs under the request lock, so no request
+        is planned meanwhile; ``None`` leaves the schedule alone. True once spliced in.
+        """
+        with self._lock:
+            for _ in range(PLAN_ATTEMPTS):
+                start_ns = self._stream.next_start()
+                state, _ = self._stream.start_state(start_ns, scaled=False)
+                position = target(state, self._stream.moving_at(start_ns))
+                if position is None:
+                    return False
+                motion = held(position, 'hold', 'measured state')
+                if self._stream.splice(start_ns, motion) is not None:
+                    self._on_plan(start_ns, motion)
+                    return True
+        return False
+
+    def stop(self, response: Trigger.Response) -> Trigger.Response:
+        """``~/stop``: brake within ``max_acceleration`` from the next tick, then hold."""
+        with self._lock:
+            request = Request('stop', self._answers.values('stop', ''), 0, None)
+            motion = self.execute(request, brake_planner)
+        response.success = motion is not None
+        response.message = ('stopping: at rest in '
+                            f'{motion.plan.duration:.3f} s' if motion else 'stop failed')
+        return response
+
+
+def brake_planner(config: Config, state: State, hold_at: np.ndarray, parsed: None
+                  ) -> PlannedMotion:
+    """Plan ``~/stop``: brake from ``state`` and hold (:func:`plan_stop`; a :data:`Planner`)."""
+    del hold_at, parsed  # a stop ends where braking ends
+    return plan_stop(config, state)
+
+
+#: A planner marked ``unscaled`` plans from the commanded state and is never slowed.
+brake_planner.unscaled = True
+
+
+def goal_request(data: bytes, received: int, joints: Sequence[str],
+                 answers: Answers) -> Request | None:
+    """
+    Read a serialised goal into a :class:`Request`, or refuse it (ERROR) and return ``None``.
+
+    ``received`` (ns, system clock) goes into its answers; ``joints`` is the joint set.
+    """
+    fields = read_goal(data)
+    if fields is None:  # not the usual little-endian CDR: let rclpy read it
+        try:
+            message = deserialize_message(data, JointState)
+        except Exception as error:  # noqa: BLE001 - wire bytes must never kill the node
+            answers.refused(Request('goal', answers.values('goal', '', received), 0, None),
+                            f'malformed message: {error}')
+            return None
+        fields = message.header.frame_id, message.name, message.position
+    frame_id, names, positions = fields
+    request = Request('goal', answers.values('goal', frame_id, received), 0, None)
+    try:
+        request.request = parse_goal(joints, names, positions)
+    except RequestError as error:
+        answers.refused(request, str(error))
+        return None
+    return request
+
+
+def via_request(data: bytes, received: int, joints: Sequence[str],
+                answers: Answers) -> Request | None:
+    """:func:`goal_request` for a serialised ``JointTrajectory``; a huge one is not built."""
+    frame_id, count = peek_via_points(data)
+    values = answers.values('via_points', frame_id, received)
+    if count > MAX_VIA_POINTS:  # refused before one Python object per point is made
+        answers.refused(Request('via_points', values, 0, None), too_many_points(count))
+        return None
+    try:
+        message = deserialize_message(data, JointTrajectory)
+    except Exception as error:  # noqa: BLE001 - bytes from the wire must never kill the node
+        answers.refused(Request('via_points', values, 0, None), f'malformed message: {error}')
+        return None
+    stamp = message.header.stamp
+    stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # 0 or past: "now"
+    request = Request('via_points', values, stamp_ns, None)
+    points = [(p.positions, p.velocities, p.accelerations, seconds(p.time_from_start))
+              for p in message.points]
+    try:
+        request.request = parse_via(joints, message.joint_names, points)
+    except RequestError as error:
+        answers.refused(request, str(error))
+        return None
+    return request

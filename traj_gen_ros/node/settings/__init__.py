@@ -1,0 +1,1 @@
+"""The parameters: declared, typed, and checked together into one Config."""

@@ -1,0 +1,1 @@
+"""The setpoint stream: the schedule of motions, sampled and published every tick."""

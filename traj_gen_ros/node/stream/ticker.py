@@ -1,0 +1,85 @@
+"""
+A thread that calls a function at every tick of a fixed grid of the node clock.
+
+Deadlines are absolute (``t0 + k · period``, the period read before each tick: ``rate_hz``
+may change), so a late wake-up does not shift the ticks after it; a tick a period or more
+late (a stalled machine, a simulated clock that jumps) restarts the grid from now and no
+tick is caught up. The thread asks for a real-time priority first
+(:func:`traj_gen_ros.node.stream.realtime.raise_priority`). Times are integer nanoseconds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+import threading
+
+from traj_gen_ros.node.stream.realtime import raise_priority
+
+
+class Ticker:
+    """The stream's thread: ``tick(deadline)`` at each deadline of a fixed grid (ns)."""
+
+    def __init__(self, now_ns: Callable[[], int], period_ns: Callable[[], int],
+                 next_deadline: Callable[[int], None], tick: Callable[[int], None],
+                 on_error: Callable[[str], None]) -> None:
+        """
+        Prepare the thread; :meth:`start` starts it.
+
+        :param now_ns: the node clock (ns).
+        :param period_ns: the period (ns), read before each tick.
+        :param next_deadline: told each deadline before the thread waits for it.
+        :param tick: called at each deadline with it; what it raises is logged
+            (``on_error``) and the ticks go on.
+        """
+        self._now_ns, self._period_ns = now_ns, period_ns
+        self._next_deadline, self._tick, self._on_error = next_deadline, tick, on_error
+        self.stopping = threading.Event()
+        self.priority = 'not started'
+        self._started = threading.Event()
+        self._thread = threading.Thread(target=self._run, name='stream', daemon=True)
+
+    def start(self) -> str:
+        """Start the thread; return the priority it got (:func:`raise_priority`)."""
+        self._thread.start()
+        self._started.wait(1.0)
+        return self.priority
+
+    def stop(self, timeout: float = 2.0) -> None:
+        """Ask the thread to end and wait for it (s)."""
+        self.stopping.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout)
+
+    def _wait_until(self, deadline_ns: int, period_ns: int) -> bool:
+        """
+        Sleep until ``deadline_ns`` on the node clock; False once stopping.
+
+        Waits on an event in steps of at most a period, so a simulated clock that runs
+        faster or slower than the wall clock is followed too.
+        """
+        while True:
+            remaining_ns = deadline_ns - self._now_ns()
+            if remaining_ns <= 0:
+                return not self.stopping.is_set()
+            if self.stopping.wait(min(remaining_ns, period_ns) * 1e-9):
+                return False
+
+    def _run(self) -> None:
+        self.priority = raise_priority()
+        self._started.set()
+        next_ns = self._now_ns()
+        while True:
+            period_ns = self._period_ns()
+            next_ns += period_ns
+            self._next_deadline(next_ns)
+            if not self._wait_until(next_ns, period_ns):
+                return
+            try:
+                self._tick(next_ns)
+            except Exception as error:  # noqa: BLE001 - the ticks outlive any one failure
+                if self.stopping.is_set():
+                    return  # shutting down (SIGINT/SIGTERM): the publisher is gone
+                self._on_error(f'stream: publishing failed: {error!r}')
+            now_ns = self._now_ns()
+            if now_ns - next_ns >= period_ns:
+                next_ns = now_ns
