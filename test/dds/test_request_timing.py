@@ -20,9 +20,10 @@ from sensor_msgs.msg import JointState
 from traj_gen_ros.node.messages.parsing import parse_goal
 from traj_gen_ros.node.planning.motion import held
 from traj_gen_ros.node.planning.pipeline import plan_request
-from traj_gen_ros.node.requests.answers import Answers, Request
+from traj_gen_ros.node.requests.answers import Answers
 from traj_gen_ros.node.requests.handler import RequestHandler, SAMPLE_AFTER_FIRST_NS
-from traj_gen_ros.node.requests.start_tick import MAX_MARGIN_NS
+from traj_gen_ros.node.requests.request import Request
+from traj_gen_ros.node.requests.start_tick import MAX_MARGIN_NS, Planner
 from traj_gen_ros.node.settings.config import make_config
 from traj_gen_ros.node.stream.stream import Stream
 from trajectory_msgs.msg import JointTrajectory
@@ -81,7 +82,7 @@ def goal(rig, positions, planning_ticks):
                 rig.tick(late=30_000)
         return plan_request(config, state, hold_at, parsed)
     values = rig.answers.values('goal', '', 0)
-    return rig.handler.execute(Request('goal', values, 0, request), slow_planner), calls
+    return rig.handler.execute(Request('goal', values, 0, request), Planner(slow_planner)), calls
 
 
 def test_a_plan_on_time_starts_at_its_tick(node):
@@ -139,7 +140,7 @@ def test_a_request_overtaken_every_time_is_refused_with_the_reason(node):
             rig.tick()
         return plan_request(config, state, hold_at, parsed)
     values = rig.answers.values('goal', '', 0)
-    assert rig.handler.execute(Request('goal', values, 0, request), always_late) is None
+    assert rig.handler.execute(Request('goal', values, 0, request), Planner(always_late)) is None
     level, text, _ = rig.statuses[-1]
     assert level == DiagnosticStatus.ERROR and 'passed its start 6 times' in text
     assert rig.state()[1].tolist() == [0.0, 0.0]  # still holding
@@ -159,7 +160,8 @@ def test_margins_from_rest_and_from_a_moving_state_are_kept_apart(node):
             return plan_request(config, state, hold_at, parsed)
         now = rig.clock[0]
         values = rig.answers.values('goal', '', 0)
-        assert rig.handler.execute(Request('goal', values, 0, request), planner) is not None
+        motion = rig.handler.execute(Request('goal', values, 0, request), Planner(planner))
+        assert motion is not None
         trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
         return trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec - now
 
@@ -199,7 +201,7 @@ def test_after_a_warm_miss_the_next_attempt_starts_one_attempt_away(node):
             rig.tick(late=30_000)
         return plan_request(config, state, hold_at, parsed)
     values = rig.answers.values('goal', '', 0)
-    assert rig.handler.execute(Request('goal', values, 0, request), overtaken_twice)
+    assert rig.handler.execute(Request('goal', values, 0, request), Planner(overtaken_twice))
     assert len(calls) == 3
     trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
     start = trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec
@@ -230,7 +232,7 @@ def test_a_cold_miss_replans_from_the_published_setpoint_only_if_a_re_plan_fits(
                 rig.clock[0] += replan_ns  # a warm re-plan, no tick meanwhile
             return plan_request(config, state, hold_at, parsed)
         values = rig.answers.values('goal', '', 0)
-        assert rig.handler.execute(Request('goal', values, 0, request), planner)
+        assert rig.handler.execute(Request('goal', values, 0, request), Planner(planner))
         trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
         return (trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec,
                 calls)
@@ -268,7 +270,7 @@ def test_a_re_plan_after_a_long_first_attempt_is_not_taken_for_a_quick_one(node)
                 rig.clock[0] += 6 * PERIOD // 10  # a re-plan, no tick meanwhile
             return plan_request(config, state, hold_at, parsed)
         values = rig.answers.values('goal', '', 0)
-        assert rig.handler.execute(Request('goal', values, 0, request), planner)
+        assert rig.handler.execute(Request('goal', values, 0, request), Planner(planner))
         assert len(calls) == 2
         trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
         return trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec
@@ -309,7 +311,7 @@ def test_trajectory_is_sampled_after_a_first_setpoint_that_is_due_soon(node, due
     values = rig.answers.values('goal', '', 0)
     try:
         motion = rig.handler.execute(Request('goal', values, 0, request),
-                                     plan_request)
+                                     Planner(plan_request))
     finally:
         ticker.join(5.0)
     assert motion is not None and rig.statuses[-1][0] == DiagnosticStatus.OK

@@ -15,7 +15,7 @@ from traj_gen_ros.node.action.goal_points import check_stamp, parse_trajectory_g
 from traj_gen_ros.node.action.tolerances import goal_tolerances, Tolerances
 from traj_gen_ros.node.messages.parsing import seconds
 from traj_gen_ros.node.planning.motion import State
-from traj_gen_ros.node.requests.answers import Request
+from traj_gen_ros.node.requests.request import Request
 from trajectory_msgs.msg import JointTrajectoryPoint
 
 
@@ -63,7 +63,7 @@ class ActiveGoal:
         ``desired`` is the commanded setpoint, ``actual`` the measured positions (the
         setpoint without a measured state) and ``error`` their difference (rad).
         """
-        named = self.goal.request.joints
+        named = self.goal.points.joints
         actual = desired.position if measured is None else measured
         feedback.joint_names = list(self.goal.names)
         feedback.header.stamp.sec, feedback.header.stamp.nanosec = divmod(now_ns, 1_000_000_000)
@@ -99,5 +99,5 @@ def read_goal_message(message: object, request: Request, joints: Sequence[str],
         [(t.name, t.position) for t in message.goal_tolerance],
         seconds(message.goal_time_tolerance))
     check_stamp(goal, now_ns)
-    request.request, request.stamp_ns = goal, goal.stamp_ns
+    request.parsed, request.stamp_ns = goal, goal.stamp_ns
     return ActiveGoal(None, goal, request, tolerances)

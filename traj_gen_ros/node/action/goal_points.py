@@ -37,12 +37,7 @@ from dataclasses import dataclass
 import math
 
 import numpy as np
-from traj_gen_ros.core.kinematic_limits import (
-    JointError,
-    limit_ratios,
-    LIMIT_TOLERANCE,
-    limit_violation,
-)
+from traj_gen_ros.core.kinematic_limits import limit_ratios, LIMIT_TOLERANCE, limit_violation
 from traj_gen_ros.core.paths import plan_path
 from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.messages.parsing import (
@@ -52,9 +47,9 @@ from traj_gen_ros.node.messages.parsing import (
     ViaPoint,
     ViaRequest,
 )
+from traj_gen_ros.node.planning.continuous_joints import shift_whole_turns
 from traj_gen_ros.node.planning.motion import held, PlannedMotion, State
-from traj_gen_ros.node.planning.pipeline import check_size, via_points
-from traj_gen_ros.node.planning.position_checks import check_plan, check_request
+from traj_gen_ros.node.planning.pipeline import plan_request, Steps, via_points
 from traj_gen_ros.node.settings.config import Config
 
 #: ``control_msgs/action/FollowJointTrajectory`` result codes (its ``Result`` constants).
@@ -82,14 +77,14 @@ class GoalError(RequestError):
 @dataclass
 class TrajectoryGoal:
     """
-    A parsed goal: its points (``request``), names in the goal's order, start stamp.
+    A parsed goal: its ``points``, names in the goal's order, start stamp.
 
     ``stamp_ns`` is the goal's ``header.stamp`` (ns, node clock; 0 = now). Planning fills
     in ``factor`` (the uniform slow-down, 1 = none) and ``slowed`` (what it says), or
     ``refusal`` (the :class:`GoalError`) when it refuses the goal.
     """
 
-    request: ViaRequest
+    points: ViaRequest
     names: tuple[str, ...]
     stamp_ns: int
     factor: float = 1.0
@@ -99,7 +94,7 @@ class TrajectoryGoal:
     @property
     def duration(self) -> float:
         """Return the last point's ``time_from_start`` (s), before any slow-down."""
-        return float(self.request.times[-1])
+        return float(self.points.times[-1])
 
 
 def parse_trajectory_goal(joints: Sequence[str], names: Sequence[str],
@@ -155,7 +150,7 @@ def check_stamp(goal: TrajectoryGoal, now_ns: int) -> None:
                         f'{now_ns * 1e-9:.6f} s): send stamp 0 to start now')
 
 
-def start_from_setpoint(goal: TrajectoryGoal, state: State, reference: np.ndarray,
+def start_from_setpoint(request: ViaRequest, state: State, reference: np.ndarray,
                         tolerance: float, joints: Sequence[str],
                         measured: bool = False) -> ViaRequest:
     """
@@ -166,7 +161,6 @@ def start_from_setpoint(goal: TrajectoryGoal, state: State, reference: np.ndarra
     (INVALID_GOAL); within it, its position becomes the setpoint's so that the motion
     starts without a jump.
     """
-    request = goal.request
     if request.times[0] != 0.0:
         return request
     named = request.joints
@@ -225,20 +219,21 @@ def plan_trajectory_goal(config: Config, state: State, hold_at: np.ndarray,
                          goal: TrajectoryGoal, reference: np.ndarray,
                          start_tolerance: float, measured: bool = False) -> PlannedMotion:
     """
-    Plan ``goal`` from the setpoint ``state``; joints it does not name go to ``hold_at``.
+    Plan ``goal`` from the setpoint ``state`` through the pipeline every request takes.
 
-    ``reference`` is where the arm is (rad): the measured state (``measured``), else
-    ``state.position``.
-    Sets ``goal.factor`` and ``goal.slowed``; raises :class:`GoalError` (also stored in
-    ``goal.refusal``) when the goal cannot be executed.
+    The action's own steps (:func:`goal_steps`): its trajectory unwrapped as a whole, its
+    start checked against ``reference`` (where the arm is, rad: the measured state
+    (``measured``), else ``state.position``), its points interpolated and slowed to fit.
+    Joints it does not name go to ``hold_at``. Sets ``goal.factor`` and ``goal.slowed``;
+    raises :class:`GoalError` (also stored in ``goal.refusal``) when the goal cannot be
+    executed.
     """
     try:
-        return _plan(config, state, hold_at, goal, reference, start_tolerance, measured)
+        return plan_request(config, state, hold_at, goal.points,
+                            goal_steps(config, goal, reference, start_tolerance, measured))
     except GoalError as error:
         goal.refusal = error
         raise
-    except JointError as error:
-        goal.refusal = GoalError(INVALID_GOAL, error.named(config.joints))
     except RequestError as error:
         goal.refusal = GoalError(INVALID_GOAL, str(error))
     except ValueError as error:
@@ -246,12 +241,38 @@ def plan_trajectory_goal(config: Config, state: State, hold_at: np.ndarray,
     raise goal.refusal
 
 
-def _plan(config: Config, state: State, hold_at: np.ndarray, goal: TrajectoryGoal,
-          reference: np.ndarray, start_tolerance: float, measured: bool) -> PlannedMotion:
-    request = start_from_setpoint(goal, state, reference, start_tolerance, config.joints,
-                                  measured)
-    if config.limits is not None:
-        check_request(config.limits, request, state.position)
+def goal_steps(config: Config, goal: TrajectoryGoal, reference: np.ndarray,
+               start_tolerance: float, measured: bool) -> Steps[ViaRequest]:
+    """
+    Return the action goal's own steps of the pipeline (see :func:`plan_trajectory_goal`).
+
+    *Unwrap*: as ``joint_trajectory_controller`` does, each continuous joint's trajectory
+    shifted as a whole by the ``2πk`` that puts its first point nearest the start
+    (:func:`shift_whole_turns`), before the start check.
+    """
+    def unwrap(start: np.ndarray, points: ViaRequest, mask: np.ndarray) -> ViaRequest:
+        named = points.joints
+        return dataclasses.replace(
+            points, positions=shift_whole_turns(start[named], points.positions, mask[named]))
+
+    def check_start(state: State, points: ViaRequest) -> ViaRequest:
+        return start_from_setpoint(points, state, reference, start_tolerance, config.joints,
+                                   measured)
+
+    def plan(config: Config, state: State, hold_at: np.ndarray, points: ViaRequest
+             ) -> PlannedMotion:
+        return interpolate(config, state, hold_at, goal, points)
+    return Steps(plan=plan, unwrap=unwrap, check_start=check_start)
+
+
+def interpolate(config: Config, state: State, hold_at: np.ndarray, goal: TrajectoryGoal,
+                request: ViaRequest) -> PlannedMotion:
+    """
+    Interpolate the goal's points (from the setpoint) and slow them down to fit the limits.
+
+    The pipeline's *plan* step for an action goal: sets ``goal.factor`` and
+    ``goal.slowed``; :class:`GoalError` when no uniform slow-down fits.
+    """
     points, times, velocities, accelerations = via_points(config.joints, state, hold_at,
                                                           request)
     if len(points) == 1:  # one point at time 0, within the tolerance: nothing to do
@@ -287,7 +308,4 @@ def _plan(config: Config, state: State, hold_at: np.ndarray, goal: TrajectoryGoa
             raise GoalError(INVALID_GOAL, 'infeasible even slowed down uniformly: '
                             f'{violation.describe(config.joints)} (from the current '
                             'motion; send it when the arm moves slower)')
-    motion = check_size(PlannedMotion(plan, kind, points[-1], goal.slowed), config)
-    if config.limits is not None:
-        check_plan(config.limits, plan, state.position)
-    return motion
+    return PlannedMotion(plan, kind, points[-1], goal.slowed)

@@ -120,7 +120,7 @@ class GoalMonitor:
         if measured is not None and self.measured_age() > STALE_AFTER:
             return  # judged on a fresh one, or ended by the timeout (abort_active)
         end_ns = active.end(now_ns, published_ns, moving)
-        ended = outcome(active.tolerances, active.goal.request.joints, self._config().joints,
+        ended = outcome(active.tolerances, active.goal.points.joints, self._config().joints,
                         (active.start_ns, end_ns, now_ns, published_ns),
                         desired.position, active.target, measured,
                         self.measured_velocities, active.goal.slowed)

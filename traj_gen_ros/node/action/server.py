@@ -47,8 +47,10 @@ from traj_gen_ros.node.action.monitor import GoalBook, GoalMonitor, KIND
 from traj_gen_ros.node.action.tolerance_parameters import ToleranceParameters
 from traj_gen_ros.node.action.tolerances import ABORTED
 from traj_gen_ros.node.planning.motion import PlannedMotion, State
-from traj_gen_ros.node.requests.answers import Answers, Request
-from traj_gen_ros.node.requests.handler import brake_planner, RequestHandler
+from traj_gen_ros.node.requests.answers import Answers
+from traj_gen_ros.node.requests.handler import BRAKE, RequestHandler
+from traj_gen_ros.node.requests.request import Request
+from traj_gen_ros.node.requests.start_tick import Planner
 from traj_gen_ros.node.settings.config import Config
 from traj_gen_ros.node.stream.stream import Stream
 
@@ -175,7 +177,7 @@ class FollowJointTrajectoryServer:
             return
         self._started(active, motion)
 
-    def _planner(self, active: ActiveGoal) -> Callable[..., PlannedMotion]:
+    def _planner(self, active: ActiveGoal) -> Planner:
         tolerance = self._tolerances.defaults[0]
 
         def plan(config: Config, state: State, hold_at: np.ndarray,
@@ -185,7 +187,7 @@ class FollowJointTrajectoryServer:
             return plan_trajectory_goal(config, state, hold_at, goal, reference,
                                         tolerance if tolerance > 0.0 else np.inf,
                                         measured is not None)
-        return plan
+        return Planner(plan)
 
     def _started(self, active: ActiveGoal, motion: PlannedMotion) -> None:
         active.end_ns = active.start_ns + int(round(motion.plan.duration * 1e9))
@@ -239,7 +241,7 @@ class FollowJointTrajectoryServer:
                     return CancelResponse.ACCEPT
                 active.cancel = Request(OWN_KINDS[0], self._answers.values(OWN_KINDS[0], ''),
                                         0, None)
-            if self._handler.submit(active.cancel, brake_planner) is None:
+            if self._handler.submit(active.cancel, BRAKE) is None:
                 active.brake_start_ns = self._stream.last_published()
             return CancelResponse.ACCEPT
         except Exception as error:  # noqa: BLE001 - a cancel must never kill the node
@@ -249,7 +251,7 @@ class FollowJointTrajectoryServer:
     def _hold(self) -> None:
         """Brake to rest within the limits: the default after a path-tolerance violation."""
         request = Request(OWN_KINDS[1], self._answers.values(OWN_KINDS[1], ''), 0, None)
-        self._handler.submit(request, brake_planner)
+        self._handler.submit(request, BRAKE)
 
     def destroy(self) -> None:
         """Destroy the action server (before the node: rclpy does not do it for waitables)."""

@@ -30,7 +30,8 @@ from traj_gen_ros.node.description.robot_description import NodeLimits
 from traj_gen_ros.node.diagnostics.status import MotionLog, node_status, RateMeter, RequestCounts
 from traj_gen_ros.node.planning.motion import PlannedMotion
 from traj_gen_ros.node.planning.position_checks import outside_ranges
-from traj_gen_ros.node.requests.answers import Answers, Request
+from traj_gen_ros.node.requests.answers import Answers
+from traj_gen_ros.node.requests.request import Request
 from traj_gen_ros.node.settings.config import Config
 
 #: Seconds between two ``/diagnostics`` messages (diagnostic_updater's default).

@@ -74,3 +74,31 @@ def unwrap_targets(start_positions: Sequence[float] | np.ndarray,
         row[mask] = row[mask] + TURN * whole
         previous = row[mask]
     return rows[0] if single else rows
+
+
+def shift_whole_turns(start_positions: Sequence[float] | np.ndarray,
+                      path: Sequence[float] | np.ndarray,
+                      continuous_mask: Sequence[bool] | np.ndarray) -> np.ndarray:
+    """
+    Shift each continuous joint's path by the whole turns that put its first point nearest.
+
+    What ``joint_trajectory_controller`` does with a timed trajectory (its
+    ``wraparound_joint``): the points keep their shape, each continuous joint's column
+    moved by the same ``2πk``, ``k`` the integer that minimises ``|path[0] + 2πk − start|``
+    (on a tie the ``k`` nearest 0).
+
+    :param start_positions: where the joints are, rad, ``(joints,)``.
+    :param path: ``(points, joints)``, rad.
+    :param continuous_mask: ``(joints,)`` bool; other joints' columns are returned as given.
+    :return: the shifted path, ``(points, joints)``.
+    """
+    start = np.asarray(start_positions, dtype=float)
+    rows = np.array(path, dtype=float)
+    mask = np.asarray(continuous_mask, dtype=bool)
+    if rows.ndim != 2 or rows.shape[1] != start.shape[0] or mask.shape != start.shape:
+        raise ValueError(f'shift_whole_turns: start {start.shape}, path {rows.shape} and '
+                         f'mask {mask.shape} must be (joints,), (points, joints), (joints,)')
+    if mask.any() and rows.shape[0]:
+        first = unwrap_targets(start[mask], rows[0, mask], np.ones(int(mask.sum()), bool))
+        rows[:, mask] += first - rows[0, mask]
+    return rows

@@ -24,9 +24,11 @@ Units: rad, rad/s, rad/s², rad/s³, s; arrays are ``(samples, joints)``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 import dataclasses
+from dataclasses import dataclass
 import math
+from typing import Generic, TypeVar
 
 import numpy as np
 from traj_gen_ros.core.jerk_limited.brake import scurve_brake
@@ -41,6 +43,9 @@ from traj_gen_ros.node.planning.motion import held, PlannedMotion, State
 from traj_gen_ros.node.planning.position_checks import check_plan, check_request
 from traj_gen_ros.node.settings.config import Config
 
+#: A request the pipeline plans: ``~/goal``'s, or points (``~/via_points``, an action goal).
+R = TypeVar('R', GoalRequest, ViaRequest)
+Requested = TypeVar('Requested', GoalRequest, ViaRequest)
 #: Profiles whose minimum-time goals the core checks exactly itself (see the module doc).
 EXACTLY_TIMED = ('cubic', 'quintic')
 #: A first via point at ``time_from_start`` 0 must match the setpoint this closely (rad).
@@ -49,27 +54,55 @@ START_TOLERANCE = 1e-6
 MAX_TRAJECTORY_POINTS = 200_000
 
 
-def plan_request(config: Config, state: State, hold_at: np.ndarray,
-                 request: GoalRequest | ViaRequest) -> PlannedMotion:
+@dataclass(frozen=True)
+class Steps(Generic[R]):
     """
-    Plan a parsed request from ``state``; joints it does not name go to ``hold_at``.
+    What one kind of request brings to the pipeline (:func:`plan_request`): its own steps.
 
-    ``hold_at`` is where the motion being replaced would have come to rest (rad).
-    Raises :class:`RequestError` with the reason when the request cannot be executed,
-    also when a commanded position or the plan leaves the position limits in force
-    (``config.limits``, :mod:`traj_gen_ros.node.planning.position_checks`). With
-    ``config.angle_wraparound``, continuous joints' targets are first moved by whole turns
-    to the nearest (:func:`unwrap_request`).
+    ``plan(config, state, hold_at, request)`` is the kind's planning (a goal's
+    minimum-time move, a path through via points, an action goal's interpolation and
+    slow-down), its own limit checks included. ``unwrap(start, request, mask)`` takes the
+    wrapping joints (``mask``) the short way from ``start`` (:func:`unwrap_each_point`, or
+    the action's :func:`shift_whole_turns` of the whole trajectory); ``check_start(state,
+    request)`` checks where the request starts and may replace its first point (the
+    action's start tolerance), before the position checks.
     """
+
+    plan: Callable[[Config, State, np.ndarray, R], PlannedMotion]
+    unwrap: Callable[[np.ndarray, R, np.ndarray], R]
+    check_start: Callable[[State, R], R] = lambda state, request: request
+
+
+def plan_request(config: Config, state: State, hold_at: np.ndarray, request: R,
+                 steps: Steps[R] | None = None) -> PlannedMotion:
+    """
+    Plan ``request`` from ``state`` through the one pipeline that every request goes through.
+
+    The steps after *read* and *check names and values* (the parsing of each kind):
+
+    1. *unwrap continuous joints* (``config.angle_wraparound``): ``steps.unwrap``;
+    2. *check the start* (``steps.check_start``) and *the positions*: every commanded
+       position within the position limits in force (``config.limits``,
+       :mod:`traj_gen_ros.node.planning.position_checks`);
+    3. *plan*: ``steps.plan`` from ``state``; joints the request does not name go to
+       ``hold_at``, where the motion being replaced would have come to rest (rad);
+    4. *check size and limits*: finite, bounded in duration and samples (:func:`check_size`),
+       and the plan's exact position extrema within the limits.
+
+    The last step, *splice*, is the caller's (:mod:`traj_gen_ros.node.requests.start_tick`).
+    ``steps`` default to the request's own: :data:`GOAL` or :data:`VIA`. Raises
+    :class:`RequestError` with the reason when the request cannot be executed.
+    """
+    steps = steps or _OWN_STEPS[type(request)]
     if config.angle_wraparound:
-        request = unwrap_request(config, state.position, request)
+        mask = wrapping_joints(config.limits)
+        if mask.any():
+            request = steps.unwrap(state.position, request, mask)
+    request = steps.check_start(state, request)
     if config.limits is not None:
         check_request(config.limits, request, state.position)
     try:
-        if isinstance(request, GoalRequest):
-            motion = plan_goal(config, state, hold_at, request)
-        else:
-            motion = plan_via(config, state, hold_at, request)
+        motion = steps.plan(config, state, hold_at, request)
     except JointError as error:
         raise RequestError(error.named(config.joints)) from None
     motion = check_size(motion, config)
@@ -78,18 +111,14 @@ def plan_request(config: Config, state: State, hold_at: np.ndarray,
     return motion
 
 
-def unwrap_request(config: Config, start: np.ndarray, request: GoalRequest | ViaRequest
-                   ) -> GoalRequest | ViaRequest:
+def unwrap_each_point(start: np.ndarray, request: Requested, mask: np.ndarray) -> Requested:
     """
     Return ``request`` with each wrapping joint's targets the shortest way round (rad).
 
     A goal is taken from ``start``; via points each from the previous one, the first from
-    ``start`` (:func:`traj_gen_ros.node.planning.continuous_joints.unwrap_targets`). Joints that do
-    not wrap (:func:`~traj_gen_ros.node.planning.continuous_joints.wrapping_joints`) are unchanged.
+    ``start`` (:func:`traj_gen_ros.node.planning.continuous_joints.unwrap_targets`); ``mask``
+    marks the wrapping joints of the joint set.
     """
-    mask = wrapping_joints(config.limits)
-    if not mask.any():
-        return request
     named = request.joints
     positions = unwrap_targets(start[named], request.positions, mask[named])
     return dataclasses.replace(request, positions=positions)
@@ -299,6 +328,13 @@ def via_points(joints: Sequence[str], state: State, hold_at: np.ndarray, request
     if accelerations is not None:
         accelerations = np.vstack([state.acceleration, accelerations])
     return points, None if request.auto_timed else times, velocities, accelerations
+
+
+#: ``~/goal``'s steps: a synchronised minimum-time move to the goal.
+GOAL: Steps[GoalRequest] = Steps(plan=plan_goal, unwrap=unwrap_each_point)
+#: ``~/via_points``' steps: a path through the points with the configured profile.
+VIA: Steps[ViaRequest] = Steps(plan=plan_via, unwrap=unwrap_each_point)
+_OWN_STEPS = {GoalRequest: GOAL, ViaRequest: VIA}
 
 
 def plan_stop(config: Config, state: State) -> PlannedMotion:

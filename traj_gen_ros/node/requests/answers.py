@@ -16,7 +16,6 @@ straight to CDR from the sample arrays (:mod:`traj_gen_ros.node.messages.wire`).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 import json
 
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
@@ -26,22 +25,11 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from traj_gen_ros.node.messages.wire import joint_trajectory_cdr
 from traj_gen_ros.node.planning.motion import PlannedMotion
 from traj_gen_ros.node.planning.pipeline import sample_motion
+from traj_gen_ros.node.requests.request import Request
 from trajectory_msgs.msg import JointTrajectory
 
 #: Depth of the status publisher: a burst of answers is kept for slow readers.
 STATUS_DEPTH = 1000
-
-
-@dataclass
-class Request:
-    """A parsed request: its kind, the values its answer carries, its start stamp (ns)."""
-
-    kind: str
-    values: dict[str, str]
-    stamp_ns: int
-    request: object
-    #: Why it was refused, once answered so (:meth:`Answers.refused`); '' until then.
-    refusal: str = ''
 
 
 class Answers:

@@ -10,8 +10,8 @@ request through at a time.
 2. *parse* (:func:`goal_request`, :func:`via_request`; :mod:`traj_gen_ros.node.messages.parsing`,
    the bytes read by :mod:`traj_gen_ros.node.messages.wire`): a malformed one is refused at once;
    the older valid ones are answered "superseded";
-3. *validate and plan* the newest (:data:`Planner`: :func:`plan_request` of
-   :mod:`traj_gen_ros.node.planning.pipeline`, or :func:`brake_planner` for ``~/stop``) from the
+3. *validate and plan* the newest (a :class:`Planner`: :data:`PIPELINE`, :func:`plan_request` of
+   :mod:`traj_gen_ros.node.planning.pipeline`, or :data:`BRAKE` for ``~/stop``) from the
    schedule's setpoint at the start: the stream's next tick not yet published (or the
    request's future ``header.stamp``), refusing with a reason;
 4. *splice* it into the schedule at the start (:meth:`Stream.splice`);
@@ -58,7 +58,8 @@ from traj_gen_ros.node.messages.parsing import (
 from traj_gen_ros.node.messages.wire import peek_via_points, read_goal
 from traj_gen_ros.node.planning.motion import held, PlannedMotion, State
 from traj_gen_ros.node.planning.pipeline import plan_request, plan_stop
-from traj_gen_ros.node.requests.answers import Answers, Request
+from traj_gen_ros.node.requests.answers import Answers
+from traj_gen_ros.node.requests.request import Request
 from traj_gen_ros.node.requests.start_tick import PLAN_ATTEMPTS, Planner, StartTick
 from traj_gen_ros.node.settings.config import Config
 from traj_gen_ros.node.stream.stream import Stream
@@ -153,7 +154,7 @@ class RequestHandler:
         if parsed:
             self._answers.superseded(parsed[:-1])
             newest = parsed[-1]
-            self.execute(newest, plan_request)
+            self.execute(newest, PIPELINE)
 
     def _pace(self) -> None:
         """End a request callback no sooner than ``REQUEST_ROUND_PERIOD`` after the last one."""
@@ -260,22 +261,25 @@ class RequestHandler:
         """``~/stop``: brake within ``max_acceleration`` from the next tick, then hold."""
         with self._lock:
             request = Request('stop', self._answers.values('stop', ''), 0, None)
-            motion = self.execute(request, brake_planner)
+            motion = self.execute(request, BRAKE)
         response.success = motion is not None
         response.message = ('stopping: at rest in '
                             f'{motion.plan.duration:.3f} s' if motion else 'stop failed')
         return response
 
 
-def brake_planner(config: Config, state: State, hold_at: np.ndarray, parsed: None
-                  ) -> PlannedMotion:
-    """Plan ``~/stop``: brake from ``state`` and hold (:func:`plan_stop`; a :data:`Planner`)."""
+def _brake(config: Config, state: State, hold_at: np.ndarray, parsed: None) -> PlannedMotion:
+    """Plan ``~/stop``: brake from ``state`` to rest (:func:`plan_stop`)."""
     del hold_at, parsed  # a stop ends where braking ends
     return plan_stop(config, state)
 
 
-#: A planner marked ``unscaled`` plans from the commanded state and is never slowed.
-brake_planner.unscaled = True
+#: Every request that moves somewhere: the one pipeline
+#: (:func:`~traj_gen_ros.node.planning.pipeline.plan_request`).
+PIPELINE = Planner(plan_request)
+#: ``~/stop`` and the action's cancel: a brake from the commanded state, never slowed. It
+#: shares the splice, not the checks: it always runs.
+BRAKE = Planner(_brake, commanded=True)
 
 
 def goal_request(data: bytes, received: int, joints: Sequence[str],
@@ -297,7 +301,7 @@ def goal_request(data: bytes, received: int, joints: Sequence[str],
     frame_id, names, positions = fields
     request = Request('goal', answers.values('goal', frame_id, received), 0, None)
     try:
-        request.request = parse_goal(joints, names, positions)
+        request.parsed = parse_goal(joints, names, positions)
     except RequestError as error:
         answers.refused(request, str(error))
         return None
@@ -323,7 +327,7 @@ def via_request(data: bytes, received: int, joints: Sequence[str],
     points = [(p.positions, p.velocities, p.accelerations, seconds(p.time_from_start))
               for p in message.points]
     try:
-        request.request = parse_via(joints, message.joint_names, points)
+        request.parsed = parse_via(joints, message.joint_names, points)
     except RequestError as error:
         answers.refused(request, str(error))
         return None

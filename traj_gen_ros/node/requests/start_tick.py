@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import collections
 from collections.abc import Callable
+from dataclasses import dataclass
 import statistics
 
 import numpy as np
 from traj_gen_ros.core.kinematic_limits import JointError
 from traj_gen_ros.node.messages.parsing import RequestError
 from traj_gen_ros.node.planning.motion import PlannedMotion, State
-from traj_gen_ros.node.requests.answers import Answers, Request
+from traj_gen_ros.node.requests.request import Refusals, Request
 from traj_gen_ros.node.settings.config import Config
 from traj_gen_ros.node.stream.stream import Stream
 
@@ -41,16 +42,29 @@ MAX_MARGIN_NS = 500_000_000
 PLAN_ATTEMPTS = 6
 RETRY_PERIODS = 2
 QUICK_RETRIES = 2
-#: Step 2's planner: a motion for ``(config, start state, where the joints a request does
-#: not name rest, the parsed request)``; :func:`~traj_gen_ros.node.planning.pipeline.plan_request`
-#: for goals and via points, :func:`brake_planner` for ``~/stop``.
-Planner = Callable[[Config, State, np.ndarray, object], PlannedMotion]
+
+
+@dataclass(frozen=True)
+class Planner:
+    """
+    How a request is planned at its start tick: ``plan(config, state, hold_at, parsed)``.
+
+    ``state`` is the schedule's at the start tick, ``hold_at`` where the joints a request
+    does not name come to rest, ``parsed`` the request's :attr:`Request.parsed`. The
+    pipeline (:func:`~traj_gen_ros.node.planning.pipeline.plan_request`) for every request
+    that moves somewhere, a brake for ``~/stop`` and the action's cancel.
+    """
+
+    plan: Callable[[Config, State, np.ndarray, object], PlannedMotion]
+    #: Plans from the commanded state (the speed scaling factor applied) and is never
+    #: slowed (``PlannedMotion.unscaled``): a brake, at full authority.
+    commanded: bool = False
 
 
 class StartTick:
     """The start tick of each new motion, from the recent planning times of its kind."""
 
-    def __init__(self, stream: Stream, answers: Answers, now_ns: Callable[[], int],
+    def __init__(self, stream: Stream, answers: Refusals, now_ns: Callable[[], int],
                  log_error: Callable[[str], None], elapsed_ns: Callable[[], int]) -> None:
         """Place motions in ``stream``; ``elapsed_ns`` times the planning (ns)."""
         self._stream = stream
@@ -65,7 +79,7 @@ class StartTick:
         # How long the last re-plans after a quick miss (warm) took (ns).
         self._warm_ns: dict[tuple[str, str, bool], collections.deque[int]] = {}
 
-    def plan_and_splice(self, request: Request, plan: Planner, config: Config
+    def plan_and_splice(self, request: Request, planner: Planner, config: Config
                         ) -> tuple[PlannedMotion, int, int, int] | None:
         """
         Plan and splice ``request``: the motion, when planned, its start and first tick.
@@ -96,10 +110,9 @@ class StartTick:
             now_ns = self._now_ns()
             # A brake plans from the commanded state, the rest from the plan's own (speed
             # scaling: docs/node.md).
-            state, hold_at = self._stream.start_state(
-                start_ns, scaled=not getattr(plan, 'unscaled', False))
+            state, hold_at = self._stream.start_state(start_ns, scaled=not planner.commanded)
             try:
-                motion = plan(config, state, hold_at, request.request)
+                motion = planner.plan(config, state, hold_at, request.parsed)
             except RequestError as error:
                 self._answers.refused(request, str(error))
                 return None
