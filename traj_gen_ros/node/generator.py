@@ -50,7 +50,6 @@ import threading
 import time
 
 import numpy as np
-from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -62,6 +61,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from traj_gen_ros.node.action.server import create_server
+from traj_gen_ros.node.action.tolerance_parameters import ToleranceParameters
 from traj_gen_ros.node.description.robot_description import NodeLimits
 from traj_gen_ros.node.diagnostics.publisher import CountingAnswers, NodeDiagnostics
 from traj_gen_ros.node.diagnostics.status import RateMeter
@@ -79,7 +79,11 @@ from traj_gen_ros.node.settings.config import (
     initial_state,
     make_config,
 )
-from traj_gen_ros.node.settings.parameters import declare_parameters
+from traj_gen_ros.node.settings.parameters import (
+    declare_parameters,
+    ParameterUse,
+    serve_parameters,
+)
 from traj_gen_ros.node.speed.input import SpeedScalingInput
 from traj_gen_ros.node.speed.time_map import TimeMap
 from traj_gen_ros.node.stream.realtime import (
@@ -107,7 +111,7 @@ class TrajectoryGenerator(Node):
         """Declare parameters, check them, and create the interface; ValueError if invalid."""
         super().__init__(NODE_NAME, **kwargs)
         self._declare_parameters()
-        self._limits = NodeLimits(self, lambda: self._apply_parameters([]))
+        self._limits = NodeLimits(self)
         self._config = self._read_config()
         initial = initial_state(self._config.joints,
                                 self.get_parameter('initial_positions').value)
@@ -160,18 +164,25 @@ class TrajectoryGenerator(Node):
             self.context, [self._goal_subscription, self._via_subscription],
             self.get_logger().error)
         self.create_service(Trigger, '~/stop', self._on_stop)
-        # ~/follow_joint_trajectory where control_msgs is importable (follow_joint_trajectory)
+        # ~/follow_joint_trajectory where control_msgs is importable (action/server.py)
+        tolerances = ToleranceParameters(self, lambda: len(self._config.joints))
         self.follow_joint_trajectory = create_server(
             self, self._requests, self._stream, self._answers, lambda: self._config,
-            self._now_ns, callback_group=requests_only)
+            self._now_ns, tolerances=tolerances,
+            arrival_ns=lambda: self._request_thread.ready_ns, arm=self.feedback,
+            callback_group=requests_only)
         if self.follow_joint_trajectory is not None:
             self._request_thread.serve(self.follow_joint_trajectory.action_server)
-            self.follow_joint_trajectory.arrival_ns = lambda: self._request_thread.ready_ns
-        if self.follow_joint_trajectory is not None and self.feedback is not None:
-            self._wire_measured_state(self.follow_joint_trajectory.monitor, self.feedback)
+            if self.feedback is not None:
+                self.feedback.add_listener(self.follow_joint_trajectory.monitor)
         self.speed_scaling = SpeedScalingInput(self, self._stream, self._requests.dropped)
-        self.add_on_set_parameters_callback(self._check_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
+        # Every party's parameter checks and changes, registered once the node is built.
+        serve_parameters(self, [ParameterUse(self._check_config, self._apply_config),
+                                ParameterUse(self._limits.check),
+                                ParameterUse(tolerances.check, tolerances.apply),
+                                ParameterUse(self.speed_scaling.check,
+                                             self.speed_scaling.apply)])
+        self._limits.add_listener(lambda: self._apply_config([]))
         self._diagnostics = NodeDiagnostics(
             self, lambda: self._config, self._limits, self._answers, self._rate_meter,
             lambda: self._stream.setpoint(self._stream.last_published()).position,
@@ -184,17 +195,6 @@ class TrajectoryGenerator(Node):
         self.get_logger().info(
             f'streaming {len(self._config.joints)} joints at {self._config.rate_hz:g} Hz '
             f'({priority}), profile {self._config.profile}{waiting}')
-
-    @staticmethod
-    def _wire_measured_state(server: object, feedback: JointFeedback) -> None:
-        """Check the action's start and tolerances against the measured state."""
-        measured = feedback.measured
-        server.measured_positions = lambda: None if measured.lost else measured.position
-        server.measured_velocities = lambda: None if measured.lost else measured.velocity
-        server.measured_age = lambda: time.monotonic() - measured.received_at
-        server.reseed_to_measured = lambda: feedback.hold_where_measured(
-            'path tolerance violated')
-        feedback.on_lost.append(server.abort_active)
 
     def _plan_publisher(self, publish: Callable[[bytes], None]
                         ) -> Callable[[int, PlannedMotion], None]:
@@ -270,22 +270,21 @@ class TrajectoryGenerator(Node):
         return dataclasses.replace(config, max_velocity=np.array(limits.velocity),
                                    limits=limits)
 
-    def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+    def _check_config(self, parameters: list[Parameter]) -> str | None:
+        """Say why the changed ``CONFIG_PARAMETERS`` make no valid ``Config``, or None."""
         values = self._parameter_values()
         values.update({p.name: p.value for p in parameters if p.name in CONFIG_PARAMETERS})
         try:
             make_config(**values)
         except ValueError as error:
-            return SetParametersResult(successful=False, reason=str(error))
-        reason = SpeedScalingInput.check(parameters)
-        return SetParametersResult(successful=reason is None, reason=reason or '')
+            return str(error)
+        return None
 
-    def _apply_parameters(self, parameters: list[Parameter]) -> None:
+    def _apply_config(self, parameters: list[Parameter]) -> None:
+        """Rebuild the ``Config`` in force (after a change, or a new URDF on the topic)."""
+        del parameters  # every change can change the limits in force: rebuilt whole
         self._config = self._read_config()  # the stream reads the period every tick
-        if hasattr(self, 'speed_scaling'):  # not while the node is being built
-            self._stream.set_scaling_limits(self._config.max_acceleration,
-                                            self._config.jerk_limit)
-            self.speed_scaling.apply(parameters)
+        self._stream.set_scaling_limits(self._config.max_acceleration, self._config.jerk_limit)
 
     def destroy_node(self) -> None:
         """Stop the request and stream threads, destroy the action server, then the node."""

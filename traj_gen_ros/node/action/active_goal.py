@@ -9,11 +9,19 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from builtin_interfaces.msg import Duration
 import numpy as np
 from rclpy.action.server import ServerGoalHandle
-from traj_gen_ros.node.action.goal_points import check_stamp, parse_trajectory_goal, TrajectoryGoal
+from traj_gen_ros.node.action.goal_points import (
+    check_stamp,
+    GoalError,
+    INVALID_GOAL,
+    parse_trajectory_goal,
+    TrajectoryGoal,
+    WHAT,
+)
 from traj_gen_ros.node.action.tolerances import goal_tolerances, Tolerances
-from traj_gen_ros.node.messages.parsing import seconds
+from traj_gen_ros.node.messages.parsing import check_no_effort, RequestError, seconds
 from traj_gen_ros.node.planning.motion import State
 from traj_gen_ros.node.requests.request import Request
 from trajectory_msgs.msg import JointTrajectoryPoint
@@ -56,24 +64,34 @@ class ActiveGoal:
         return max(self.end_ns, self.at_rest_ns)
 
     def feedback(self, feedback: object, now_ns: int, desired: State,
-                 measured: np.ndarray | None) -> object:
+                 measured: np.ndarray | None, velocities: np.ndarray | None = None) -> object:
         """
         Fill a ``FollowJointTrajectory.Feedback``: the goal's joints, in its order.
 
-        ``desired`` is the commanded setpoint, ``actual`` the measured positions (the
-        setpoint without a measured state) and ``error`` their difference (rad).
+        ``desired`` is the commanded setpoint, ``actual`` the measured positions and
+        ``velocities`` (rad, rad/s; without a measured state the setpoint's) and ``error``
+        their difference. ``time_from_start`` of ``desired`` and ``actual`` is the time
+        since the goal's start (as ``joint_trajectory_controller`` fills it), ``error``'s 0.
         """
         named = self.goal.points.joints
         actual = desired.position if measured is None else measured
+        if measured is None:
+            velocities = desired.velocity
         feedback.joint_names = list(self.goal.names)
         feedback.header.stamp.sec, feedback.header.stamp.nanosec = divmod(now_ns, 1_000_000_000)
+        since = Duration()
+        since.sec, since.nanosec = divmod(max(now_ns - self.start_ns, 0), 1_000_000_000)
         feedback.desired = JointTrajectoryPoint(
             positions=desired.position[named].tolist(),
             velocities=desired.velocity[named].tolist(),
-            accelerations=desired.acceleration[named].tolist())
-        feedback.actual = JointTrajectoryPoint(positions=actual[named].tolist())
-        feedback.error = JointTrajectoryPoint(
-            positions=(desired.position[named] - actual[named]).tolist())
+            accelerations=desired.acceleration[named].tolist(), time_from_start=since)
+        feedback.actual = JointTrajectoryPoint(
+            positions=actual[named].tolist(), time_from_start=since,
+            velocities=[] if velocities is None else velocities[named].tolist())
+        error = JointTrajectoryPoint(positions=(desired.position[named] - actual[named]).tolist())
+        if velocities is not None:
+            error.velocities = (desired.velocity[named] - velocities[named]).tolist()
+        feedback.error = error
         return feedback
 
 
@@ -91,6 +109,10 @@ def read_goal_message(message: object, request: Request, joints: Sequence[str],
     stamp = trajectory.header.stamp
     points = [(p.positions, p.velocities, p.accelerations, seconds(p.time_from_start))
               for p in trajectory.points]
+    try:
+        check_no_effort([p.effort for p in trajectory.points], WHAT)
+    except RequestError as error:
+        raise GoalError(INVALID_GOAL, str(error)) from None
     goal = parse_trajectory_goal(joints, trajectory.joint_names, points,
                                  stamp.sec * 1_000_000_000 + stamp.nanosec,
                                  len(message.multi_dof_trajectory.points))

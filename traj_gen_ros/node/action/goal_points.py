@@ -41,6 +41,7 @@ from traj_gen_ros.core.kinematic_limits import limit_ratios, LIMIT_TOLERANCE, li
 from traj_gen_ros.core.paths import plan_path
 from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.messages.parsing import (
+    JointNameError,
     MAX_DURATION,
     parse_via,
     RequestError,
@@ -59,8 +60,8 @@ INVALID_JOINTS = -2
 OLD_HEADER_TIMESTAMP = -3
 PATH_TOLERANCE_VIOLATED = -4
 GOAL_TOLERANCE_VIOLATED = -5
-#: What the goal is called in the reasons.
-WHAT = 'follow_joint_trajectory goal'
+#: What the goal is called in the reasons (its log lines say follow_joint_trajectory).
+WHAT = 'the goal'
 #: A last point's velocity or acceleration above this is not at rest (rad/s, rad/s²).
 AT_REST = 1e-9
 
@@ -110,17 +111,10 @@ def parse_trajectory_goal(joints: Sequence[str], names: Sequence[str],
     if multi_dof_points:
         raise GoalError(INVALID_GOAL, f'{WHAT} has {multi_dof_points} multi_dof_trajectory '
                         'points: this node executes joint trajectories only; leave it empty')
-    if not names:
-        raise GoalError(INVALID_JOINTS, f'{WHAT} names no joint: give a subset of '
-                        f'{list(joints)}')
-    for index, name in enumerate(names):
-        if name not in joints:
-            raise GoalError(INVALID_JOINTS, f'{WHAT} names unknown joint {name!r}; known '
-                            f'joints: {list(joints)}')
-        if name in names[:index]:
-            raise GoalError(INVALID_JOINTS, f'{WHAT} names joint {name!r} more than once')
     try:
         request = parse_via(joints, names, points, WHAT)
+    except JointNameError as error:
+        raise GoalError(INVALID_JOINTS, str(error)) from None
     except RequestError as error:
         raise GoalError(INVALID_GOAL, str(error)) from None
     if request.auto_timed and len(request.times) > 1:

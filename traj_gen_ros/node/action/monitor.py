@@ -1,18 +1,20 @@
 """
 The running ``~/follow_joint_trajectory`` goal watched, and every goal ended once.
 
-A timer on the executor (every ``MONITOR_PERIOD`` s while a goal is active or replaced
-ones wait for their end) publishes the feedback (:meth:`ActiveGoal.feedback`, at most once
-per stream period), checks the tolerances against a measured state no older than
-``STALE_AFTER`` and ends the goal: SUCCEEDED once the stream has sent the trajectory's end
-(and the arm is within ``goal_tolerance`` and still), CANCELED once a cancel's brake is at
-rest, ABORTED when a tolerance is violated or another request replaced it.
+On a timer of the executor's (every ``MONITOR_PERIOD`` s while a goal is active or replaced
+ones wait for their end: :meth:`GoalMonitor.watch`) the monitor publishes the feedback
+(:meth:`ActiveGoal.feedback`, at most once per stream period), checks the tolerances
+against a measured state no older than ``STALE_AFTER`` and ends the goal: SUCCEEDED once
+the stream has sent the trajectory's end (and the arm is within ``goal_tolerance`` and
+still), CANCELED once a cancel's brake is at rest, ABORTED when a tolerance is violated or
+another request replaced it.
 
 A goal's end is decided once (the first decided counts: the monitor may end a goal the
 request thread has just replaced); before rclpy has made its handle it is kept and applied
-when it has. The terminal state and result are set by an execute callback scheduled on the
-executor (``ActionServer.notify_execute``). What the request thread and the executor share
-is a :class:`GoalBook` under its lock.
+when it has. The terminal state and result are set by the server (``end``: an execute
+callback scheduled on the executor). What the request thread and the executor share is a
+:class:`GoalBook` under its lock. No ROS objects are made here: the server gives the
+monitor what it uses (the measured arm, the brake, the logger, how to end a goal).
 """
 
 from __future__ import annotations
@@ -20,22 +22,16 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 import threading
+from typing import Protocol
 
 import numpy as np
-from rclpy.action import ActionServer
 from rclpy.action.server import ServerGoalHandle
-from rclpy.node import Node
 from traj_gen_ros.node.action.active_goal import ActiveGoal
 from traj_gen_ros.node.action.goal_points import INVALID_GOAL, PATH_TOLERANCE_VIOLATED, SUCCESSFUL
-from traj_gen_ros.node.action.tolerances import ABORTED, CANCELED, outcome, SUCCEEDED
+from traj_gen_ros.node.action.tolerances import ABORTED, CANCELED, outcome
 from traj_gen_ros.node.planning.motion import State
 from traj_gen_ros.node.settings.config import Config
 from traj_gen_ros.node.stream.stream import Stream
-
-try:
-    from control_msgs.action import FollowJointTrajectory
-except ImportError:  # no control_msgs: nothing creates a monitor
-    FollowJointTrajectory = None
 
 KIND = 'follow_joint_trajectory'
 #: The monitor's period (s): feedback rate and how soon a result follows its cause.
@@ -54,41 +50,63 @@ class GoalBook:
     replaced: list[ActiveGoal] = field(default_factory=list)
 
 
+class Logger(Protocol):
+    """What the monitor logs through (an rclpy node's logger is one)."""
+
+    def info(self, message: str) -> bool:
+        """Log ``message`` at INFO."""
+
+    def warning(self, message: str) -> bool:
+        """Log ``message`` at WARN."""
+
+    def error(self, message: str) -> bool:
+        """Log ``message`` at ERROR."""
+
+
+class MeasuredArm(Protocol):
+    """Where the arm is, as the goal's tolerances need it (``JointFeedback`` is one)."""
+
+    def positions(self) -> np.ndarray | None:
+        """Return the measured positions (rad, joint-set order), None if none or lost."""
+
+    def velocities(self) -> np.ndarray | None:
+        """Return the measured velocities (rad/s), None if the driver gives none."""
+
+    def age(self) -> float:
+        """Return the seconds since the last valid measured state arrived."""
+
+    def reseed_to_measured(self, reason: str) -> bool:
+        """Hold where the arm is from the next tick (logged with ``reason``)."""
+
+
+#: Schedules a goal's terminal state and result: ``(handle, status, error code, text)``.
+EndGoal = Callable[[ServerGoalHandle, str, int, str], None]
+
+
 class GoalMonitor:
     """Feedback, tolerances and the end of the goals (see the module doc)."""
 
-    def __init__(self, node: Node, stream: Stream, config: Callable[[], Config],
-                 now_ns: Callable[[], int], book: GoalBook, hold: Callable[[], None]) -> None:
+    def __init__(self, stream: Stream, config: Callable[[], Config],
+                 now_ns: Callable[[], int], book: GoalBook, *, brake: Callable[[], None],
+                 arm: MeasuredArm | None, log: Logger, end: EndGoal,
+                 feedback: Callable[[], object]) -> None:
         """
-        Watch ``book``'s goals on ``node``'s executor; :attr:`server` is set by its owner.
+        Watch ``book``'s goals (:meth:`watch`, on the executor's timer).
 
-        ``hold`` brakes to rest: what a path-tolerance violation does without a measured
-        state's own re-seed (:attr:`reseed_to_measured`).
+        ``brake`` brakes to rest: what a path-tolerance violation does without a measured
+        ``arm`` (with one, the setpoint is re-seeded where the arm is). ``end`` schedules a
+        goal's terminal state; ``feedback()`` makes an empty feedback message.
         """
         self._stream, self._config, self._now_ns, self._book = stream, config, now_ns, book
-        self._log = node.get_logger()
-        self.server: ActionServer | None = None
-        #: Where the arm is (rad, joint-set order) and how fast (rad/s), or None without
-        #: a measured state; s since it arrived; hold where it is (attributes).
-        self.measured_positions: Callable[[], np.ndarray | None] = lambda: None
-        self.measured_velocities: Callable[[], np.ndarray | None] = lambda: None
-        self.measured_age: Callable[[], float] = lambda: 0.0
-        self.reseed_to_measured: Callable[[], None] = hold
-        self._timer = node.create_timer(MONITOR_PERIOD, self._monitor)
-        self._timer.cancel()
+        self._brake, self._arm, self._log = brake, arm, log
+        self._end, self._new_feedback = end, feedback
 
-    def wake(self, node: Node) -> None:
-        """Start watching now (a goal was started)."""
-        self._timer.reset()
-        if node.executor is not None:
-            node.executor.wake()  # its wait began without the monitor timer
+    def watch(self) -> bool:
+        """
+        End the replaced goals, watch the active one; return whether any goal is left.
 
-    def destroy(self) -> None:
-        """Stop the timer."""
-        self._timer.cancel()
-
-    def _monitor(self) -> None:
-        """End the replaced goals, watch the active one (executor thread, a timer)."""
+        Executor thread (a timer every ``MONITOR_PERIOD`` s while one is).
+        """
         book = self._book
         try:
             with book.lock:
@@ -100,10 +118,26 @@ class GoalMonitor:
                               else SUCCESSFUL, goal.replaced)
             if active is not None and active.target is not None:  # started
                 self._watch(active)
-            if book.active is None and not book.replaced:
-                self._timer.cancel()
         except Exception as error:  # noqa: BLE001 - the monitor must never kill the node
             self._log.error(f'{KIND}: monitor failed: {error!r}')
+        return book.active is not None or bool(book.replaced)
+
+    def goal_waits(self) -> bool:
+        """
+        Tell whether a started goal runs or waits at its end for its tolerances (any thread).
+
+        While one does, the node keeps commanding its trajectory's end, as
+        ``joint_trajectory_controller`` does: the measured state does not re-seed the
+        setpoint (the arm is the reference once no goal waits).
+        """
+        with self._book.lock:
+            active = self._book.active
+            return active is not None and active.target is not None and active.cancel is None
+
+    def _measured(self) -> tuple[np.ndarray | None, float]:
+        if self._arm is None:
+            return None, 0.0
+        return self._arm.positions(), self._arm.age()
 
     def _watch(self, active: ActiveGoal) -> None:
         now_ns = self._now_ns()
@@ -115,29 +149,33 @@ class GoalMonitor:
                 self.finish(active, CANCELED, SUCCESSFUL, 'canceled: braked to rest')
             return
         desired = self._stream.setpoint(max(now_ns, published_ns))  # commanded: scaled
-        measured = self.measured_positions()
-        self._feedback(active, now_ns, desired, measured)
-        if measured is not None and self.measured_age() > STALE_AFTER:
-            return  # judged on a fresh one, or ended by the timeout (abort_active)
+        measured, age = self._measured()
+        velocities = None if self._arm is None else self._arm.velocities
+        self._feedback(active, now_ns, desired, measured,
+                       None if velocities is None else velocities())
+        if measured is not None and age > STALE_AFTER:
+            return  # judged on a fresh one, or ended by the timeout (measured_state_lost)
         end_ns = active.end(now_ns, published_ns, moving)
         ended = outcome(active.tolerances, active.goal.points.joints, self._config().joints,
                         (active.start_ns, end_ns, now_ns, published_ns),
                         desired.position, active.target, measured,
-                        self.measured_velocities, active.goal.slowed)
+                        velocities or (lambda: None), active.goal.slowed)
         if ended is not None:
             self.finish(active, *ended)
             if ended[1] == PATH_TOLERANCE_VIOLATED:
-                self.reseed_to_measured()
+                if self._arm is None or not self._arm.reseed_to_measured(
+                        'path tolerance violated'):
+                    self._brake()
 
     def _feedback(self, active: ActiveGoal, now_ns: int, desired: State,
-                  measured: np.ndarray | None) -> None:
+                  measured: np.ndarray | None, velocities: np.ndarray | None) -> None:
         if now_ns - active.feedback_ns < self._config().period_ns:
             return
         active.feedback_ns = now_ns
         active.handle.publish_feedback(active.feedback(
-            FollowJointTrajectory.Feedback(), now_ns, desired, measured))
+            self._new_feedback(), now_ns, desired, measured, velocities))
 
-    def abort_active(self, reason: str) -> None:
+    def measured_state_lost(self, reason: str) -> None:
         """End the running goal ABORTED with ``reason``: the measured state was lost."""
         with self._book.lock:
             active = self._book.active
@@ -163,25 +201,9 @@ class GoalMonitor:
         self.end(goal.handle, status, code, text)
 
     def end(self, handle: ServerGoalHandle, status: str, code: int, text: str) -> None:
-        """Schedule the goal's terminal state and result (see the module doc)."""
-        result = FollowJointTrajectory.Result(error_code=code, error_string=text)
-        if status == SUCCEEDED:
-            self._log.info(f'{KIND} goal succeeded{": " + text if text else ""}')
+        """Log the goal's end (a failure WARN, else INFO) and schedule its terminal state."""
+        if status == ABORTED:
+            self._log.warning(f'{KIND} goal aborted (error_code {code}): {text}')
         else:
-            self._log.warning(f'{KIND} goal {status} (error_code {code}): {text}')
-
-        def finish(goal_handle: ServerGoalHandle) -> object:
-            if status == SUCCEEDED:
-                goal_handle.succeed()
-            elif status == CANCELED and goal_handle.is_cancel_requested:
-                goal_handle.canceled()
-            else:
-                goal_handle.abort()
-            return result
-        self.server.notify_execute(handle, finish)
-
-    @staticmethod
-    def unexpected(handle: ServerGoalHandle) -> object:
-        """Never scheduled (:meth:`end` gives each goal its own): abort."""
-        handle.abort()
-        return FollowJointTrajectory.Result(error_code=INVALID_GOAL, error_string='internal')
+            self._log.info(f'{KIND} goal {status}{": " + text if text else ""}')
+        self._end(handle, status, code, text)

@@ -29,7 +29,7 @@ as soon as it does.
 from __future__ import annotations
 
 from collections.abc import Callable
-import time
+from dataclasses import dataclass
 
 import numpy as np
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
@@ -43,9 +43,15 @@ from traj_gen_ros.node.action.goal_points import (
     plan_trajectory_goal,
     TrajectoryGoal,
 )
-from traj_gen_ros.node.action.monitor import GoalBook, GoalMonitor, KIND
+from traj_gen_ros.node.action.monitor import (
+    GoalBook,
+    GoalMonitor,
+    KIND,
+    MeasuredArm,
+    MONITOR_PERIOD,
+)
 from traj_gen_ros.node.action.tolerance_parameters import ToleranceParameters
-from traj_gen_ros.node.action.tolerances import ABORTED
+from traj_gen_ros.node.action.tolerances import ABORTED, CANCELED, SUCCEEDED
 from traj_gen_ros.node.planning.motion import PlannedMotion, State
 from traj_gen_ros.node.requests.answers import Answers
 from traj_gen_ros.node.requests.handler import BRAKE, RequestHandler
@@ -62,49 +68,77 @@ except ImportError as _error:  # no control_msgs: the node runs without the acti
     UNAVAILABLE = str(_error)
 
 #: The requests the action itself makes (braking on a cancel or a path violation).
-OWN_KINDS = ('follow_joint_trajectory_cancel', 'follow_joint_trajectory_hold')
+OWN_KINDS = ('follow_joint_trajectory_cancel', 'follow_joint_trajectory_brake')
 _REPLACED_BY = {'goal': 'a ~/goal request', 'via_points': 'a ~/via_points request',
                 'stop': 'a ~/stop call', KIND: 'a newer follow_joint_trajectory goal'}
+#: What happens to the arm when a goal is replaced: the new request's motion, or a brake.
+_THEN = {'stop': 'the arm brakes to rest'}
+
+
+@dataclass(frozen=True)
+class GoalOutcome:
+    """What the goal callback made of a goal: running (``active``, ``motion``) or refused."""
+
+    active: ActiveGoal | None = None
+    motion: PlannedMotion | None = None
+    code: int = INVALID_GOAL
+    reason: str = 'internal error: not planned'
+
+    @property
+    def running(self) -> bool:
+        """Whether the goal was planned and spliced in."""
+        return self.active is not None and self.motion is not None
+
+
+def mark_executing(handle: ServerGoalHandle) -> None:
+    """
+    Move an accepted goal to EXECUTING without scheduling an execute callback.
+
+    rclpy 7.1.6 (Jazzy) has no public call for it: ``ServerGoalHandle.execute()`` also
+    schedules the execute callback on the executor, which Jazzy's executor resumes on
+    every spin while it waits (a busy loop beside the stream thread); the terminal state
+    is scheduled once, when the goal ends (:meth:`FollowJointTrajectoryServer.end`). The
+    one use of rclpy's private ``_update_state``, here.
+    """
+    handle._update_state(GoalEvent.EXECUTE)
 
 
 class FollowJointTrajectoryServer:
     """The action server and the life cycle of its goals (see the module doc)."""
 
     def __init__(self, node: Node, handler: RequestHandler, stream: Stream, answers: Answers,
-                 config: Callable[[], Config], now_ns: Callable[[], int],
+                 config: Callable[[], Config], now_ns: Callable[[], int], *,
+                 tolerances: ToleranceParameters, arrival_ns: Callable[[], int],
+                 arm: MeasuredArm | None = None,
                  callback_group: CallbackGroup | None = None) -> None:
         """
         Serve ``~/follow_joint_trajectory`` on ``node`` through ``handler``.
 
+        :param tolerances: the tolerance parameters in force.
+        :param arrival_ns: when a goal arrived (system ns: the request thread's wake-up).
+        :param arm: the measured state (``JointFeedback``), None when standalone.
         :param callback_group: the action server's (a ``NotForTheExecutor``, whose
             thread then serves :attr:`action_server`); default the node's.
-
-        The measured state, where there is one, is the :attr:`monitor`'s.
         """
         self._node, self._handler, self._stream, self._answers = node, handler, stream, answers
-        self._config, self._now_ns = config, now_ns
-        #: When the goal arrived (system ns): the request thread's wake-up (attribute).
-        self.arrival_ns: Callable[[], int] = time.time_ns
+        self._config, self._now_ns, self._arrival_ns = config, now_ns, arrival_ns
+        self._tolerances, self._arm = tolerances, arm
         self._log = node.get_logger()
         self._book = GoalBook()
         self._lock = self._book.lock
         self._starting: ActiveGoal | None = None
-        self._pending: tuple | None = None  # (goal message, outcome) from _on_goal
-        self.monitor = GoalMonitor(node, stream, config, now_ns, self._book, self._hold)
-        self._tolerances = ToleranceParameters(node, lambda: len(self._config().joints))
-        previous = handler.on_accepted
-
-        def on_accepted(request: Request, start_ns: int) -> None:
-            previous(request, start_ns)
-            self._on_request_accepted(request, start_ns)
-        handler.on_accepted = on_accepted
-        handler.on_dropped = self._on_request_dropped
+        self._pending: tuple[object, GoalOutcome] | None = None  # (message, its outcome)
         self._server = ActionServer(
-            node, FollowJointTrajectory, '~/follow_joint_trajectory', self.monitor.unexpected,
+            node, FollowJointTrajectory, '~/follow_joint_trajectory', _never_executed,
             goal_callback=self._on_goal, handle_accepted_callback=self._start,
             cancel_callback=self._on_cancel,
             callback_group=callback_group)
-        self.monitor.server = self._server
+        self.monitor = GoalMonitor(stream, config, now_ns, self._book, brake=self._brake,
+                                   arm=arm, log=self._log, end=self._schedule_end,
+                                   feedback=FollowJointTrajectory.Feedback)
+        self._timer = node.create_timer(MONITOR_PERIOD, self._watch)
+        self._timer.cancel()
+        handler.add_listener(self)
 
     @property
     def action_server(self) -> ActionServer:
@@ -119,12 +153,12 @@ class FollowJointTrajectoryServer:
 
         Every goal is accepted; one refused is aborted in :meth:`_start`, with its reason.
         """
-        received = self.arrival_ns()  # as ~/goal's 'received': system ns
+        received = self._arrival_ns()  # as ~/goal's 'received': system ns
         self._end_orphan()
         trajectory = message.trajectory
         request = Request(KIND, self._answers.values(KIND, trajectory.header.frame_id,
                                                      received), 0, None)
-        outcome: tuple = (INVALID_GOAL, 'internal error: not planned')
+        outcome = GoalOutcome()
         try:
             active = read_goal_message(message, request, self._config().joints,
                                        self._tolerances.defaults[1], self._now_ns())
@@ -133,15 +167,15 @@ class FollowJointTrajectoryServer:
             if motion is None:  # refused (answered on ~/status already): say why here too
                 refusal = active.goal.refusal or GoalError(
                     INVALID_GOAL, request.refusal or 'refused: resend it')
-                outcome = (refusal.code, str(refusal))
+                outcome = GoalOutcome(code=refusal.code, reason=str(refusal))
             else:
-                outcome = (active, motion)
+                outcome = GoalOutcome(active, motion)
         except GoalError as error:
             self._answers.refused(request, str(error))
-            outcome = (error.code, str(error))
+            outcome = GoalOutcome(code=error.code, reason=str(error))
         except Exception as error:  # noqa: BLE001 - a goal must never kill the node
             self._log.error(f'{KIND}: unexpected failure: {error!r}')
-            outcome = (INVALID_GOAL, f'internal error: {error}')
+            outcome = GoalOutcome(reason=f'internal error: {error}')
         finally:
             self._starting = None
             self._pending = (message, outcome)
@@ -150,11 +184,11 @@ class FollowJointTrajectoryServer:
     def _end_orphan(self) -> None:
         """End a goal planned in :meth:`_on_goal` whose handle rclpy never made."""
         pending, self._pending = self._pending, None
-        if pending is not None and isinstance(pending[1][0], ActiveGoal):
+        if pending is not None and pending[1].running:
             # rclpy could not send its response (the client went away): nobody owns it.
             self._log.warning(f'{KIND}: a goal whose response could not be sent was '
                               'running: ended; its motion goes on as any other')
-            self.monitor.finish(pending[1][0], ABORTED, INVALID_GOAL,
+            self.monitor.finish(pending[1].active, ABORTED, INVALID_GOAL,
                                 'the goal response failed')
 
     def _start(self, handle: ServerGoalHandle) -> None:
@@ -163,12 +197,12 @@ class FollowJointTrajectoryServer:
         if pending is None or pending[0] is not handle.request:  # not seen by _on_goal
             self._on_goal(handle.request)
             pending, self._pending = self._pending, None
-        handle._update_state(GoalEvent.EXECUTE)  # what execute() does, minus scheduling
+        mark_executing(handle)
         outcome = pending[1]
-        if not isinstance(outcome[0], ActiveGoal):
-            self.monitor.end(handle, ABORTED, *outcome)
+        if not outcome.running:  # refused: logged and answered on ~/status already
+            self._schedule_end(handle, ABORTED, outcome.code, outcome.reason)
             return
-        active, motion = outcome
+        active, motion = outcome.active, outcome.motion
         with self._lock:
             active.handle = handle
             early_end = active.early_end
@@ -182,7 +216,7 @@ class FollowJointTrajectoryServer:
 
         def plan(config: Config, state: State, hold_at: np.ndarray,
                  goal: TrajectoryGoal) -> PlannedMotion:
-            measured = self.monitor.measured_positions()
+            measured = None if self._arm is None else self._arm.positions()
             reference = state.position if measured is None else measured
             return plan_trajectory_goal(config, state, hold_at, goal, reference,
                                         tolerance if tolerance > 0.0 else np.inf,
@@ -196,10 +230,21 @@ class FollowJointTrajectoryServer:
         if goal.factor > 1.0:
             self._log.warning(f'{KIND} goal: {goal.slowed}: lasts '
                               f'{motion.plan.duration:.4g} s instead of {goal.duration:.4g} s')
-        self.monitor.wake(self._node)
+        self._wake()
 
-    def _on_request_accepted(self, request: Request, start_ns: int) -> None:
-        """Any request spliced in (any thread): the one it replaces ends (:meth:`_monitor`)."""
+    def _wake(self) -> None:
+        """Start watching now (a goal was started)."""
+        self._timer.reset()
+        if self._node.executor is not None:
+            self._node.executor.wake()  # its wait began without the monitor's timer
+
+    def _watch(self) -> None:
+        """Run the monitor's round (executor thread); stop the timer when no goal is left."""
+        if not self.monitor.watch():
+            self._timer.cancel()
+
+    def accepted(self, request: Request, start_ns: int) -> None:
+        """Any request spliced in (any thread): the goal it replaces ends (the monitor)."""
         book = self._book
         with self._lock:
             active, starting = book.active, self._starting
@@ -213,12 +258,13 @@ class FollowJointTrajectoryServer:
             else:
                 book.active = None
             if active is not None:
+                then = _THEN.get(request.kind, 'its motion continues from the setpoint')
                 active.replaced = (f'replaced by {_REPLACED_BY.get(request.kind, request.kind)} '
                                    f'(request_id {request.values.get("request_id", "?")}); '
-                                   'the motion continues from the setpoint')
+                                   f'{then}')
                 book.replaced.append(active)
 
-    def _on_request_dropped(self, request: Request, reason: str) -> None:
+    def dropped(self, request: Request, reason: str) -> None:
         """Abort the active goal if its request was dropped before its start."""
         book = self._book
         with self._lock:
@@ -248,25 +294,49 @@ class FollowJointTrajectoryServer:
             self._log.error(f'{KIND}: cancel failed: {error!r}')
             return CancelResponse.REJECT
 
-    def _hold(self) -> None:
-        """Brake to rest within the limits: the default after a path-tolerance violation."""
+    def _brake(self) -> None:
+        """Brake to rest within the limits: after a path-tolerance violation, without an arm."""
         request = Request(OWN_KINDS[1], self._answers.values(OWN_KINDS[1], ''), 0, None)
         self._handler.submit(request, BRAKE)
 
+    def _schedule_end(self, handle: ServerGoalHandle, status: str, code: int, text: str
+                      ) -> None:
+        """Set the goal's terminal state and result from the executor (``notify_execute``)."""
+        result = FollowJointTrajectory.Result(error_code=code, error_string=text)
+
+        def finish(goal_handle: ServerGoalHandle) -> object:
+            if status == SUCCEEDED:
+                goal_handle.succeed()
+            elif status == CANCELED and goal_handle.is_cancel_requested:
+                goal_handle.canceled()
+            else:
+                goal_handle.abort()
+            return result
+        self._server.notify_execute(handle, finish)
+
     def destroy(self) -> None:
         """Destroy the action server (before the node: rclpy does not do it for waitables)."""
-        self.monitor.destroy()
+        self._timer.cancel()
         self._server.destroy()
 
 
+def _never_executed(handle: ServerGoalHandle) -> object:
+    """Never scheduled (each goal's end is scheduled on its own): abort."""
+    handle.abort()
+    return FollowJointTrajectory.Result(error_code=INVALID_GOAL, error_string='internal')
+
+
 def create_server(node: Node, handler: RequestHandler, stream: Stream, answers: Answers,
-                  config: Callable[[], Config], now_ns: Callable[[], int],
-                  callback_group: CallbackGroup | None = None
+                  config: Callable[[], Config], now_ns: Callable[[], int], **options: object
                   ) -> FollowJointTrajectoryServer | None:
-    """Create the action server, or say once (info) why there is none and return None."""
+    """
+    Create the action server, or say once (info) why there is none and return None.
+
+    ``options`` are :class:`FollowJointTrajectoryServer`'s keyword arguments.
+    """
     if FollowJointTrajectory is None:
         node.get_logger().info(f'control_msgs is not importable ({UNAVAILABLE}): running '
                                'without ~/follow_joint_trajectory')
         return None
     return FollowJointTrajectoryServer(node, handler, stream, answers, config, now_ns,
-                                       callback_group=callback_group)
+                                       **options)

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from traj_gen_ros.node.action.tolerances import (
     read_defaults,
@@ -25,25 +24,25 @@ class ToleranceParameters:
     """The tolerance defaults in force: ``(allowed_start_tolerance (rad), Tolerances)``."""
 
     def __init__(self, node: Node, joint_count: Callable[[], int]) -> None:
-        """Read them from ``node`` now and after every accepted set (``ValueError``)."""
+        """Read them from ``node`` now (``ValueError``), again in :meth:`apply`."""
         self._node = node
         self._joint_count = joint_count
         self.defaults = self._read({})
-        node.add_on_set_parameters_callback(self._check)
-        node.add_post_set_parameters_callback(self._apply)
 
     def _read(self, changed: dict[str, object]) -> tuple[float, Tolerances]:
         return read_defaults(lambda name: self._node.get_parameter(name).value,
                              self._joint_count(), changed)
 
-    def _check(self, parameters: list) -> SetParametersResult:
+    def check(self, parameters: list) -> str | None:
+        """Say why the tolerance parameters among ``parameters`` are refused, or None."""
         changed = {p.name: p.value for p in parameters if p.name in TOLERANCE_PARAMETERS}
         try:
             self._read(changed)
         except ValueError as error:
-            return SetParametersResult(successful=False, reason=str(error))
-        return SetParametersResult(successful=True)
+            return str(error)
+        return None
 
-    def _apply(self, parameters: list) -> None:
+    def apply(self, parameters: list) -> None:
+        """Read the defaults again after an accepted change of one of them."""
         if any(p.name in TOLERANCE_PARAMETERS for p in parameters):
             self.defaults = self._read({})

@@ -28,7 +28,6 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 import numpy as np
-from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -51,16 +50,14 @@ LIMIT_PARAMETERS = ('min_position', 'max_position', 'max_velocity', 'robot_descr
 class NodeLimits:
     """The URDF in force, where it came from, and the limits it gives with the parameters."""
 
-    def __init__(self, node: Node, refresh: Callable[[], None]) -> None:
+    def __init__(self, node: Node) -> None:
         """
         Read the ``robot_description`` parameter and subscribe to the topic.
 
-        :param refresh: rebuilds the node's ``Config`` (through :meth:`in_force`) after a new
-            URDF arrives on the topic.
         :raises ValueError: the ``robot_description`` parameter is not a usable URDF.
         """
         self._node = node
-        self._refresh = refresh
+        self._listeners: list[Callable[[], None]] = []
         self._joints = tuple(node.get_parameter('joints').value)
         self._urdf = UrdfLimits.unlimited(self._joints)
         #: Where the URDF in force came from, e.g. ``topic /robot_description``, or ``none``.
@@ -70,9 +67,16 @@ class NodeLimits:
         self._parameter_text = ''
         self._logged = ''
         self._take_parameter(node.get_parameter('robot_description').value)
-        node.add_on_set_parameters_callback(self._check_parameters)
         self._subscription = node.create_subscription(
             String, 'robot_description', self._on_description, DESCRIPTION_QOS)
+
+    def add_listener(self, changed: Callable[[], None]) -> None:
+        """
+        Call ``changed()`` after a new URDF arrived on the topic and was taken.
+
+        The node then rebuilds its ``Config`` (through :meth:`in_force`).
+        """
+        self._listeners.append(changed)
 
     # ------------------------------------------------------------------ URDF sources
 
@@ -98,7 +102,8 @@ class NodeLimits:
         self.source = f'topic {topic}' if message.data else 'none'
         self.problem = ''
         self._report_urdf()
-        self._refresh()
+        for changed in self._listeners:
+            changed()
 
     def _report_urdf(self) -> None:
         logger = self._node.get_logger()
@@ -122,11 +127,11 @@ class NodeLimits:
                             max_position=_one_or_all(values['max_position']),
                             max_velocity=velocity if velocity.size != 1 else velocity[0])
 
-    def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
-        """On-set callback: refuse limits that cannot be merged, or an unusable URDF."""
+    def check(self, parameters: list[Parameter]) -> str | None:
+        """Say why limits that cannot be merged, or an unusable URDF, are refused; or None."""
         names = {p.name for p in parameters}
         if not names & {'min_position', 'max_position', 'robot_description'}:
-            return SetParametersResult(successful=True)  # max_velocity: node_config checks
+            return None  # max_velocity: make_config checks it
         values = self._parameters(parameters)
         try:
             urdf = self._urdf
@@ -134,8 +139,8 @@ class NodeLimits:
                 urdf = self._parse(values['robot_description'])
             self._merge(urdf, values)
         except Exception as error:  # noqa: BLE001 - no URDF may stop the node
-            return SetParametersResult(successful=False, reason=_reason(error))
-        return SetParametersResult(successful=True)
+            return _reason(error)
+        return None
 
     # ------------------------------------------------------------------ the limits in force
 

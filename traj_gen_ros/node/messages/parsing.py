@@ -32,6 +32,10 @@ class RequestError(ValueError):
     """A request the generator refuses; ``str(error)`` says what is wrong and what is valid."""
 
 
+class JointNameError(RequestError):
+    """A request naming no joint, an unknown one or one twice (the action's INVALID_JOINTS)."""
+
+
 @dataclass(frozen=True)
 class GoalRequest:
     """Move ``joints`` (indices into the joint set) to ``positions`` (rad)."""
@@ -58,20 +62,41 @@ class ViaRequest:
     auto_timed: bool
 
 
-def _joint_indices(joints: Sequence[str], names: Sequence[str], what: str) -> np.ndarray:
+def joint_indices(joints: Sequence[str], names: Sequence[str], what: str) -> np.ndarray:
+    """
+    Return the indices of ``names`` in the joint set ``joints``; :class:`JointNameError` if not.
+
+    Each name must be known and named once, and at least one must be given; ``what``
+    names the request in the reason.
+    """
+    joints = list(joints)
     if len(names) == 0:
-        raise RequestError(f'{what} names no joint: give a subset of {list(joints)}')
+        raise JointNameError(f'{what} names no joint: give a subset of {joints}')
     seen = set()
     indices = []
     for name in names:
-        if name in seen:
-            raise RequestError(f'{what} names joint {name!r} more than once')
-        seen.add(name)
         if name not in joints:
-            raise RequestError(f'{what} names unknown joint {name!r}; known joints: '
-                               f'{list(joints)}')
+            raise JointNameError(f'{what} names unknown joint {name!r}; known joints: '
+                                 f'{joints}')
+        if name in seen:
+            raise JointNameError(f'{what} names joint {name!r} more than once')
+        seen.add(name)
         indices.append(joints.index(name))
     return np.asarray(indices, dtype=int)
+
+
+def check_no_effort(efforts: Sequence[Sequence[float]], what: str) -> None:
+    """
+    Refuse points that carry ``effort``: the node commands positions (and velocities) only.
+
+    As ``joint_trajectory_controller`` refuses them without an effort command interface.
+    ``efforts`` are the points' ``effort`` fields, in order.
+    """
+    for number, effort in enumerate(efforts):
+        if len(effort):
+            raise RequestError(f'{what} point {number} has {len(effort)} effort values: this '
+                               'node commands positions only (no effort command interface); '
+                               'leave effort empty')
 
 
 def _finite_row(values: Sequence[float], names: Sequence[str], what: str) -> np.ndarray:
@@ -88,7 +113,7 @@ def parse_goal(joints: Sequence[str], names: Sequence[str],
                positions: Sequence[float]) -> GoalRequest:
     """Check a goal (``JointState`` name/position fields) against the joint set."""
     joints = list(joints)
-    indices = _joint_indices(joints, list(names), 'goal')
+    indices = joint_indices(joints, list(names), 'goal')
     if len(positions) != len(names):
         raise RequestError(f'goal has {len(names)} names but {len(positions)} positions: '
                            f'give exactly one position per name')
@@ -106,7 +131,7 @@ def parse_via(joints: Sequence[str], names: Sequence[str],
     """
     joints = list(joints)
     names = list(names)
-    indices = _joint_indices(joints, names, what)
+    indices = joint_indices(joints, names, what)
     if len(points) == 0:
         raise RequestError(f'{what} has no points: give at least one point')
     if len(points) > MAX_VIA_POINTS:

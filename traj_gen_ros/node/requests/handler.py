@@ -48,6 +48,7 @@ from rclpy.subscription import Subscription
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from traj_gen_ros.node.messages.parsing import (
+    check_no_effort,
     MAX_VIA_POINTS,
     parse_goal,
     parse_via,
@@ -59,7 +60,7 @@ from traj_gen_ros.node.messages.wire import peek_via_points, read_goal
 from traj_gen_ros.node.planning.motion import held, PlannedMotion, State
 from traj_gen_ros.node.planning.pipeline import plan_request, plan_stop
 from traj_gen_ros.node.requests.answers import Answers
-from traj_gen_ros.node.requests.request import Request
+from traj_gen_ros.node.requests.request import Request, RequestListener
 from traj_gen_ros.node.requests.start_tick import PLAN_ATTEMPTS, Planner, StartTick
 from traj_gen_ros.node.settings.config import Config
 from traj_gen_ros.node.stream.stream import Stream
@@ -109,12 +110,16 @@ class RequestHandler:
         # Requests come from the request thread and ~/stop from the executor: one at a time.
         self._lock = threading.Lock()
         self._start_tick = StartTick(stream, answers, now_ns, log_error, elapsed_ns)
-        #: Called with each request spliced in and its start (ns), before it is answered:
-        #: ``~/follow_joint_trajectory`` ends the goal a newer request replaced.
-        self.on_accepted: Callable[[Request, int], None] = lambda request, start_ns: None
-        #: Called with each accepted request dropped before its start and why, after it
-        #: is answered: ``~/follow_joint_trajectory`` aborts its goal.
-        self.on_dropped: Callable[[Request, str], None] = lambda request, reason: None
+        self._listeners: list[RequestListener] = []
+
+    def add_listener(self, listener: RequestListener) -> None:
+        """
+        Tell ``listener`` of every request spliced in and every one dropped before its start.
+
+        ``~/follow_joint_trajectory`` ends the goal a newer request replaced, and aborts
+        its goal when it is dropped.
+        """
+        self._listeners.append(listener)
 
     # ------------------------------------------------------------------ take and parse
 
@@ -181,7 +186,8 @@ class RequestHandler:
             return None
         motion, now_ns, start_ns, first_ns = placed
         self._on_plan(start_ns, motion)
-        self.on_accepted(request, start_ns)
+        for listener in self._listeners:
+            listener.accepted(request, start_ns)
         waited = first_ns - self._now_ns() <= SAMPLE_AFTER_FIRST_NS
         if waited:
             self._stream.wait_published(first_ns, ANSWER_WAIT)
@@ -215,7 +221,8 @@ class RequestHandler:
                 if isinstance(request, Request):
                     self._answers.report(DiagnosticStatus.ERROR,
                                          f'{request.kind} dropped: {reason}', request.values)
-                    self.on_dropped(request, reason)
+                    for listener in self._listeners:
+                        listener.dropped(request, reason)
 
     def _brake(self, config: Config) -> None:
         """Brake from the next tick (after a failure, or when the measured state is lost)."""
@@ -236,13 +243,14 @@ class RequestHandler:
         with self._lock:
             self._brake(self._config())
 
-    def hold(self, target: Callable[[State, bool], np.ndarray | None]) -> bool:
+    def reseed(self, target: Callable[[State, bool], np.ndarray | None]) -> bool:
         """
-        Hold from the next tick where ``target(state there, moving)`` says (rad), if it does.
+        Re-seed the setpoint where ``target(state at the next tick, moving)`` says (rad).
 
-        The measured state re-seeds the setpoint so: one step to that position at the
-        tick, then at rest there. ``target`` runs under the request lock, so no request
-        is planned meanwhile; ``None`` leaves the schedule alone. True once spliced in.
+        How the measured state re-seeds the setpoint: one step to that position at the
+        next tick, then a hold there (a plan of no duration). ``target`` runs under the
+        request lock, so no request is planned meanwhile; ``None`` leaves the schedule
+        alone. True once spliced in.
         """
         with self._lock:
             for _ in range(PLAN_ATTEMPTS):
@@ -251,7 +259,7 @@ class RequestHandler:
                 position = target(state, self._stream.moving_at(start_ns))
                 if position is None:
                     return False
-                motion = held(position, 'hold', 'measured state')
+                motion = held(position, 'hold', 're-seeded at the measured state')
                 if self._stream.splice(start_ns, motion) is not None:
                     self._on_plan(start_ns, motion)
                     return True
@@ -327,6 +335,7 @@ def via_request(data: bytes, received: int, joints: Sequence[str],
     points = [(p.positions, p.velocities, p.accelerations, seconds(p.time_from_start))
               for p in message.points]
     try:
+        check_no_effort([p.effort for p in message.points], 'via_points')
         request.parsed = parse_via(joints, message.joint_names, points)
     except RequestError as error:
         answers.refused(request, str(error))

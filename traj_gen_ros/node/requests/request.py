@@ -3,8 +3,8 @@ A request on its way through the node, and what planning and splicing need of th
 
 No ROS here: :class:`Request` is what every request (``~/goal``, ``~/via_points``,
 ``~/stop``, an action goal, the action's own brakes) carries from its parsing to its answer;
-:class:`Refusals` is the part of :class:`~traj_gen_ros.node.requests.answers.Answers` that
-the start tick uses.
+:class:`RequestListener` is what a party that follows them implements; :class:`Refusals`
+the part of :class:`~traj_gen_ros.node.requests.answers.Answers` that the start tick uses.
 """
 
 from __future__ import annotations
@@ -28,6 +28,16 @@ class Request:
     parsed: object
     #: Why it was refused, once answered so (:meth:`Refusals.refused`); '' until then.
     refusal: str = ''
+
+
+class RequestListener(Protocol):
+    """A party told of the requests spliced in and dropped (the action server is one)."""
+
+    def accepted(self, request: Request, start_ns: int) -> None:
+        """Take note: ``request`` was spliced in to start at ``start_ns`` (ns), before its answer."""
+
+    def dropped(self, request: Request, reason: str) -> None:
+        """Take note: accepted ``request`` was dropped before its start, for ``reason``."""
 
 
 class Refusals(Protocol):

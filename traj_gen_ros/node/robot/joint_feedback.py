@@ -9,17 +9,23 @@ the driver reports them) on the executor thread, and a timer that watches
 
 * the first valid message seeds the stream (:meth:`Stream.seed`): it starts there, at rest;
 * a valid message while the node holds still, farther than ``state_tolerance`` from the
-  held setpoint: hold where the arm is from the next tick
-  (:meth:`RequestHandler.hold`), logged (warn) and counted on ``/diagnostics``;
+  held setpoint: re-seed the setpoint where the arm is from the next tick
+  (:meth:`RequestHandler.reseed`), logged (warn) and counted on ``/diagnostics`` — unless
+  a listener's goal waits at its end for its tolerances (an action goal: the node keeps
+  commanding its end, as ``joint_trajectory_controller`` does);
 * no valid message for ``joint_topic_timeout`` s: brake within the limits
-  (:meth:`RequestHandler.brake`), call the :attr:`JointFeedback.on_lost` hooks (an action
-  server ends its goal), and refuse requests until a message arrives.
+  (:meth:`RequestHandler.brake`), tell the listeners (an action server ends its goal), and
+  refuse requests until a message arrives.
+
+It is also the :class:`~traj_gen_ros.node.action.monitor.MeasuredArm` an action goal's
+tolerances are checked against (:meth:`positions`, :meth:`velocities`, :meth:`age`,
+:meth:`reseed_to_measured`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 import time
+from typing import Protocol
 
 import numpy as np
 from rclpy.node import Node
@@ -38,6 +44,16 @@ DEPTH = 10
 CHECKS_PER_TIMEOUT = 5
 
 
+class FeedbackListener(Protocol):
+    """A party told of the measured state's loss, that can keep the setpoint where it is."""
+
+    def measured_state_lost(self, reason: str) -> None:
+        """Take note: no valid measured state for ``joint_topic_timeout`` s (``reason``)."""
+
+    def goal_waits(self) -> bool:
+        """Tell whether a goal runs or waits at its end: the setpoint is not re-seeded then."""
+
+
 class JointFeedback:
     """The ``joint_topic`` subscription and its timeout timer."""
 
@@ -48,8 +64,7 @@ class JointFeedback:
         self._stream = stream
         self._requests = requests
         self._logger = node.get_logger()
-        #: Called with the reason when the measured state is lost (timeout).
-        self.on_lost: list[Callable[[str], None]] = []
+        self._listeners: list[FeedbackListener] = []
         self._subscription = node.create_subscription(
             JointState, measured.topic, self._on_message,
             QoSProfile(depth=DEPTH, reliability=ReliabilityPolicy.BEST_EFFORT), raw=True)
@@ -57,10 +72,26 @@ class JointFeedback:
             node.create_timer(min(measured.timeout / CHECKS_PER_TIMEOUT, 0.05),
                               self._check_timeout)
 
+    def add_listener(self, listener: FeedbackListener) -> None:
+        """Tell ``listener`` when the measured state is lost; ask it before a re-seed."""
+        self._listeners.append(listener)
+
     @property
     def lost(self) -> bool:
         """Whether no valid measured state arrived for ``joint_topic_timeout`` s."""
         return self.measured.lost
+
+    def positions(self) -> np.ndarray | None:
+        """Return where the arm is (rad, joint-set order), None before the first or if lost."""
+        return None if self.measured.lost else self.measured.position
+
+    def velocities(self) -> np.ndarray | None:
+        """Return the measured velocities (rad/s), None if lost or not reported."""
+        return None if self.measured.lost else self.measured.velocity
+
+    def age(self) -> float:
+        """Return the seconds since the last valid measured state arrived."""
+        return time.monotonic() - self.measured.received_at
 
     def _on_message(self, data: bytes, info: dict) -> None:
         del info
@@ -89,17 +120,19 @@ class JointFeedback:
         state, _ = self._stream.start_state(start_ns)
         if self._stream.moving_at(start_ns) or self.measured.deviation(state.position) is None:
             return  # the usual case, without taking the request lock
+        if any(listener.goal_waits() for listener in self._listeners):
+            return  # the goal's end stays commanded while the goal waits for the arm
         found = []  # the deviation of the attempt that was spliced in (the last one)
 
         def target(state: State, moving: bool) -> np.ndarray | None:
             return self._reseed_if_idle(state, moving, found)
-        if self._requests.hold(target):
+        if self._requests.reseed(target):
             self._logger.warning(self.measured.note_reseed(*found[-1]))  # counted once
 
     def _reseed_if_idle(self, state: State, moving: bool, found: list
                         ) -> np.ndarray | None:
         """
-        Where to hold: the measured state if idle and beyond the tolerance, else None.
+        Where to re-seed: the measured state if idle and beyond the tolerance, else None.
 
         Checked again under the request lock, on every attempt (one that misses its tick
         under load is made again): the deviation goes to ``found``, counted once held.
@@ -112,9 +145,11 @@ class JointFeedback:
         found.append(deviation)
         return self.measured.position.copy()
 
-    def hold_where_measured(self, reason: str) -> bool:
+    def reseed_to_measured(self, reason: str) -> bool:
         """
-        Hold where the arm is from the next tick, moving or not (a path-tolerance violation).
+        Re-seed the setpoint where the arm is from the next tick, moving or not.
+
+        What a path-tolerance violation does.
 
         The one step at that tick is toward the measured positions by construction (it
         ends there). Logged with ``reason``; False when no measured state is known.
@@ -125,7 +160,7 @@ class JointFeedback:
         self.measured.reseeds += 1
         self.measured.last_reseed = f'{reason}: holding where the arm is'
         self._logger.warning(self.measured.last_reseed)
-        return self._requests.hold(lambda state, moving: position)
+        return self._requests.reseed(lambda state, moving: position)
 
     def _check_timeout(self) -> None:
         measured = self.measured
@@ -135,5 +170,5 @@ class JointFeedback:
         reason = f'no measured state on {measured.topic} for {measured.timeout:g} s'
         self._logger.error(f'{reason}: braking; refusing requests until it returns')
         self._requests.brake()
-        for hook in self.on_lost:
-            hook(reason)
+        for listener in self._listeners:
+            listener.measured_state_lost(reason)

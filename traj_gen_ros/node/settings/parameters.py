@@ -27,9 +27,16 @@ Units: rad (or m), rad/s, rad/s², rad/s³, Hz.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 import math
 
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
+from rcl_interfaces.msg import (
+    FloatingPointRange,
+    ParameterDescriptor,
+    ParameterType,
+    SetParametersResult,
+)
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from traj_gen_ros.node.settings.config import (
@@ -243,3 +250,37 @@ def declare_parameters(node: Node) -> None:
             value = default
         node.declare_parameter(name, value, descriptor, ignore_override=True)
     node.add_pre_set_parameters_callback(typed_parameters)
+
+
+@dataclass(frozen=True)
+class ParameterUse:
+    """
+    One party's part in a parameter change: ``check`` it, then ``apply`` it once accepted.
+
+    ``check(parameters)`` returns the reason to refuse the change, or None.
+    """
+
+    check: Callable[[list[Parameter]], str | None]
+    apply: Callable[[list[Parameter]], None] = lambda parameters: None
+
+
+def serve_parameters(node: Node, uses: Sequence[ParameterUse]) -> None:
+    """
+    Register the node's one on-set and one post-set parameter callback, over ``uses``.
+
+    A change is refused with the first reason a ``check`` gives (then nothing changes);
+    an accepted one is applied by every ``apply``, in order. Registered once the node is
+    built, so no callback reaches a half-built node.
+    """
+    def check(parameters: list[Parameter]) -> SetParametersResult:
+        for use in uses:
+            reason = use.check(parameters)
+            if reason is not None:
+                return SetParametersResult(successful=False, reason=reason)
+        return SetParametersResult(successful=True)
+
+    def apply(parameters: list[Parameter]) -> None:
+        for use in uses:
+            use.apply(parameters)
+    node.add_on_set_parameters_callback(check)
+    node.add_post_set_parameters_callback(apply)
