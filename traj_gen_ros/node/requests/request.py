@@ -34,7 +34,7 @@ class RequestListener(Protocol):
     """A party told of the requests spliced in and dropped (the action server is one)."""
 
     def accepted(self, request: Request, start_ns: int) -> None:
-        """Take note: ``request`` was spliced in to start at ``start_ns`` (ns), before its answer."""
+        """Take note: ``request`` was spliced in to start at ``start_ns`` (ns); answered next."""
 
     def dropped(self, request: Request, reason: str) -> None:
         """Take note: accepted ``request`` was dropped before its start, for ``reason``."""
