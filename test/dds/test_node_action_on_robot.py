@@ -27,6 +27,7 @@ from node_harness import (
     node_env,
     Probe,
     running_node,
+    seconds,
     stamp_gaps,
     stamp_ns,
     trajectory_arrays,
@@ -188,6 +189,13 @@ def test_start_is_checked_against_the_measured_position_and_feedback_is_measured
             assert np.allclose(np.subtract(fb.desired.positions, fb.actual.positions),
                                fb.error.positions, atol=1e-15)
         assert exact >= 0.9 * len(feedback)  # this process may miss a best-effort message
+        # As JTC fills them: the time since the goal's start in desired and actual, and the
+        # measured velocities (the stand-in robot reports them).
+        since = [seconds(m.feedback.desired.time_from_start) for m in feedback]
+        assert since == [seconds(m.feedback.actual.time_from_start) for m in feedback]
+        assert np.all(np.diff(since) > 0) and 0 <= since[0] < 0.5 and since[-1] > 1.0
+        assert all(len(m.feedback.actual.velocities) == len(names) for m in feedback)
+        assert max(abs(v) for m in feedback for v in m.feedback.actual.velocities) > 0.1
         at_rest = feedback[-1].feedback  # the setpoint at the end, the arm off by its bias
         assert np.allclose(at_rest.desired.positions, target[order], atol=1e-9)
         assert np.allclose(np.array(at_rest.actual.positions) - at_rest.desired.positions,
@@ -270,6 +278,37 @@ def test_goal_tolerance_of_the_goal_itself_violated_by_a_robot_that_lags():
         assert min(abs(m[0] - at) for m in probe.measured[-100:]) < 2e-3  # measured, then
         end_ns = plan_end_ns(probe)
         assert end_ns + 0.3e9 <= arrival < sent + moveit_timeout_ns(3.0)
+
+
+@pytest.mark.parametrize('goal_time', [1.0, 0.0], ids=['goal_time_tolerance 1 s', 'no limit'])
+def test_a_lagging_joint_released_within_the_goal_time_reaches_the_goal(goal_time):
+    """
+    While the goal waits for its tolerance the node keeps commanding its end (as JTC).
+
+    joint_1 is held back near the end and released 0.25 s after the trajectory's end: the
+    setpoint is not re-seeded where the arm is (0.2 rad off, beyond ``state_tolerance``),
+    so the released arm arrives and the goal succeeds; then the arm is the reference again.
+    """
+    with session('-p', f'goal_time_tolerance:={goal_time}') as (probe, node):
+        setpoint, arm = probe.settled()
+        target = setpoint + [0.6, -0.3, 0, 0, 0, 0]
+        handle = probe.send([(arm, 0.0), (target, 2.0)],
+                            goal_tolerance=[JointTolerance(name='joint_1', position=0.02)],
+                            goal_time_tolerance=Duration(sec=int(goal_time)))
+        probe.when_setpoint(0, target[0] - 0.2)
+        probe.freeze.publish(Float64MultiArray(data=[0.0]))
+        probe.wait_at_rest(10.0)
+        end_ns = plan_end_ns(probe)
+        probe.spin_until(lambda: stamp_ns(probe.latest().header.stamp) > end_ns + 0.25e9,
+                         10.0, '0.25 s after the end')
+        assert np.array_equal(probe.position(), target)  # the goal's end, not the arm
+        assert target[0] - probe.arm()[0] > 0.1
+        probe.freeze.publish(Float64MultiArray(data=[]))
+        status, code, text, _ = probe.result(handle)
+        assert (status, code, text) == (SUCCEEDED, Result.SUCCESSFUL, '')
+        final, arm = probe.settled()
+        assert np.array_equal(final, target) and np.allclose(arm, target, atol=1e-9)
+        assert 'holding where the arm is' not in node.output()
 
 
 def test_path_tolerance_violated_holds_where_the_arm_is_then_a_new_goal_runs():

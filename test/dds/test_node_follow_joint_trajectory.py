@@ -271,8 +271,31 @@ def test_goal_or_stop_preempts_an_action_goal(session, rest, other):
     status, code, text = result(session, handle)
     assert status == GoalStatus.STATUS_ABORTED
     assert f'replaced by a ~/{other}' in text, text
+    then = 'the arm brakes to rest' if other == 'stop' else 'its motion continues'
+    assert then in text, text
     probe.wait_at_rest()
     assert_continuous(probe, start)
+
+
+def test_points_with_effort_are_refused_the_node_commands_positions(session, rest):
+    """As JTC without an effort command interface: INVALID_GOAL, and ~/via_points alike."""
+    probe, client = session
+    count = len(probe.trajectories)
+    message = via_message(JOINTS, [(rest, 0.0), (rest + 0.2, 1.0)])
+    message.points[1].effort = [1.0] * len(JOINTS)
+    future = client.send_goal_async(FollowJointTrajectory.Goal(trajectory=message))
+    probe.spin_until(future.done, 10.0, 'the goal response')
+    status, code, text = result(session, future.result())
+    assert (status, code) == (GoalStatus.STATUS_ABORTED, Result.INVALID_GOAL), text
+    assert text == ('the goal point 1 has 6 effort values: this node commands positions '
+                    'only (no effort command interface); leave effort empty')
+    answer, _ = probe.request(message)
+    assert answer.level == b'\x02'
+    assert answer.message == ('via_points refused: via_points point 1 has 6 effort values: '
+                              'this node commands positions only (no effort command '
+                              'interface); leave effort empty')
+    assert len(probe.trajectories) == count  # nothing spliced in
+    assert np.array_equal(probe.wait_at_rest(), rest)
 
 
 def test_feedback_at_a_steady_rate(session, rest):
@@ -376,3 +399,4 @@ def test_a_goal_slowed_by_speed_scaling_runs_twice_as_long_and_succeeds(session,
 def seconds_of_plan(plan) -> float:
     last = plan.points[-1].time_from_start
     return last.sec + last.nanosec * 1e-9
+
