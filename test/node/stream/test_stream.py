@@ -3,28 +3,10 @@
 import numpy as np
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
+from stream_rig import make_stream, PERIOD, tick
 from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.planning.motion import held, PlannedMotion
 from traj_gen_ros.node.stream.stream import Stream
-
-PERIOD = 10_000_000
-
-
-def make_stream():
-    clock = [10**12]
-    published, errors = [], []
-    stream = Stream(held([0.1, 0.2]), ['a', 'b'], lambda: clock[0], lambda: PERIOD,
-                    published.append, errors.append)
-    return stream, clock, published, errors
-
-
-def tick(stream, clock, late=0):
-    """Publish the next tick of the grid, sampled ``late`` ns after its deadline."""
-    deadline = stream.next_start()
-    clock[0] = deadline + late
-    stream._publish_tick(deadline)
-    stream._next_tick_ns = deadline + PERIOD  # as the stream thread does after a tick
-    return deadline
 
 
 def decoded(data):
