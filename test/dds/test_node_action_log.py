@@ -54,7 +54,7 @@ def test_the_log_says_a_refusal_once_and_a_cancel_is_not_a_warning():
     refused = [line for line in log.splitlines() if "unknown joint 'elbow'" in line]
     assert len(refused) == 1, refused  # one line, the kind said once
     assert refused[0].startswith('[WARN]'), refused
-    assert refused[0].endswith("follow_joint_trajectory refused: the goal names unknown joint "
+    assert refused[0].endswith('follow_joint_trajectory refused: the goal names unknown joint '
                                f"'elbow'; known joints: {JOINTS}"), refused
     canceled = [line for line in log.splitlines() if 'goal canceled' in line]
     assert len(canceled) == 1 and canceled[0].startswith('[INFO]'), canceled

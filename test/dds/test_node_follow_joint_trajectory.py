@@ -399,4 +399,3 @@ def test_a_goal_slowed_by_speed_scaling_runs_twice_as_long_and_succeeds(session,
 def seconds_of_plan(plan) -> float:
     last = plan.points[-1].time_from_start
     return last.sec + last.nanosec * 1e-9
-

@@ -34,7 +34,8 @@ from reliability_cases import (
 from sensor_msgs.msg import JointState
 from traj_gen_ros.node.messages.parsing import parse_goal, parse_via, RequestError
 from traj_gen_ros.node.planning.motion import held
-from traj_gen_ros.node.planning.pipeline import plan_request, sample_motion
+from traj_gen_ros.node.planning.pipeline import plan_request
+from traj_gen_ros.node.planning.sampling import sample_motion
 from traj_gen_ros.node.settings.config import DEFAULT_MAX_JERK, make_config
 from traj_gen_ros.node.stream.schedule import Schedule
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint

@@ -14,7 +14,7 @@ SECOND = 1_000_000_000
 
 
 def active(names=('c', 'a'), start_ns=5 * SECOND, seconds=2.0):
-    """A goal of ``names`` started at ``start_ns``, planned to last ``seconds``."""
+    """Return a goal of ``names`` started at ``start_ns``, planned to last ``seconds``."""
     goal = parse_trajectory_goal(JOINTS, names, [([0.5] * len(names), (), (), seconds)], 0)
     return ActiveGoal(None, goal, Request('follow_joint_trajectory', {}, 0, goal),
                       default_tolerances(3, 0.0, 0.0, 0.0, 0.0), start_ns=start_ns,
@@ -22,7 +22,7 @@ def active(names=('c', 'a'), start_ns=5 * SECOND, seconds=2.0):
 
 
 def empty_feedback():
-    """What the monitor fills: a ``FollowJointTrajectory.Feedback``'s fields."""
+    """Return what the monitor fills: a ``FollowJointTrajectory.Feedback``'s fields."""
     return SimpleNamespace(header=SimpleNamespace(stamp=SimpleNamespace(sec=0, nanosec=0)))
 
 

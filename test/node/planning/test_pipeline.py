@@ -17,13 +17,9 @@ from traj_gen_ros.node.messages.parsing import (
 )
 from traj_gen_ros.node.messages.wire import peek_via_points, read_goal, read_joint_state
 from traj_gen_ros.node.planning.motion import held, State
-from traj_gen_ros.node.planning.pipeline import (
-    plan_request,
-    plan_stop,
-    sample_grid,
-    sample_motion,
-    via_points,
-)
+from traj_gen_ros.node.planning.pipeline import plan_request, plan_stop
+from traj_gen_ros.node.planning.sampling import sample_grid, sample_motion
+from traj_gen_ros.node.planning.via_path import via_points
 from traj_gen_ros.node.settings.config import make_config
 from traj_gen_ros.node.stream.schedule import Schedule
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint

@@ -50,7 +50,8 @@ from traj_gen_ros.node.messages.parsing import (
 )
 from traj_gen_ros.node.planning.continuous_joints import shift_whole_turns
 from traj_gen_ros.node.planning.motion import held, PlannedMotion, State
-from traj_gen_ros.node.planning.pipeline import plan_request, Steps, via_points
+from traj_gen_ros.node.planning.pipeline import plan_request, Steps
+from traj_gen_ros.node.planning.via_path import via_points
 from traj_gen_ros.node.settings.config import Config
 
 #: ``control_msgs/action/FollowJointTrajectory`` result codes (its ``Result`` constants).

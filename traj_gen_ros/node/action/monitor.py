@@ -67,10 +67,10 @@ class MeasuredArm(Protocol):
     """Where the arm is, as the goal's tolerances need it (``JointFeedback`` is one)."""
 
     def positions(self) -> np.ndarray | None:
-        """Return the measured positions (rad, joint-set order), None if none or lost."""
+        """Return where the arm is, in rad and joint-set order; None if unknown or lost."""
 
     def velocities(self) -> np.ndarray | None:
-        """Return the measured velocities (rad/s), None if the driver gives none."""
+        """Return how fast the arm moves, in rad/s; None if its driver says nothing of it."""
 
     def age(self) -> float:
         """Return the seconds since the last valid measured state arrived."""
@@ -201,7 +201,7 @@ class GoalMonitor:
         self.end(goal.handle, status, code, text)
 
     def end(self, handle: ServerGoalHandle, status: str, code: int, text: str) -> None:
-        """Log the goal's end (a failure WARN, else INFO) and schedule its terminal state."""
+        """Log how the goal ends, a failure at WARN, else INFO; schedule its terminal state."""
         if status == ABORTED:
             self._log.warning(f'{KIND} goal aborted (error_code {code}): {text}')
         else:

@@ -24,7 +24,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from traj_gen_ros.node.messages.wire import joint_trajectory_cdr
 from traj_gen_ros.node.planning.motion import PlannedMotion
-from traj_gen_ros.node.planning.pipeline import sample_motion
+from traj_gen_ros.node.planning.sampling import sample_motion
 from traj_gen_ros.node.requests.request import Request
 from trajectory_msgs.msg import JointTrajectory
 

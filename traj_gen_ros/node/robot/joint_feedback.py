@@ -86,7 +86,7 @@ class JointFeedback:
         return None if self.measured.lost else self.measured.position
 
     def velocities(self) -> np.ndarray | None:
-        """Return the measured velocities (rad/s), None if lost or not reported."""
+        """Return how fast the arm moves, in rad/s; None if lost or not reported."""
         return None if self.measured.lost else self.measured.velocity
 
     def age(self) -> float:
