@@ -236,6 +236,16 @@ def test_heuristic_via_velocity_concrete_example():
     np.testing.assert_allclose(velocity[:, 0], [0.0, 0.0, -7.5, 0.0, 0.0], atol=1e-12)
 
 
+def test_heuristic_step_within_the_resolution_counts_as_none():
+    # Slopes 1e-9, 1, 1: the mean 0.5 at point 1 (same sign), unless a step of 1e-9 is
+    # no motion (resolution 1e-8, Ruckig's precision, as scurve_via uses it): a stop.
+    points, durations = np.array([[0.0], [1e-9], [1.0 + 1e-9], [2.0 + 1e-9]]), np.ones(3)
+    np.testing.assert_allclose(heuristic_velocities(points, durations)[:, 0],
+                               [0.0, 0.5 * (1e-9 + 1.0), 1.0, 0.0], rtol=1e-15)
+    np.testing.assert_allclose(heuristic_velocities(points, durations, resolution=1e-8)[:, 0],
+                               [0.0, 0.0, 1.0, 0.0], rtol=1e-15)
+
+
 # --- LSPB through via points ---------------------------------------------------------
 
 

@@ -233,6 +233,19 @@ def test_far_target_beyond_ruckigs_duration_limit_is_planned():
     check_plan(fixed, q0, qf, np.zeros(2), np.zeros(2), *limits)
 
 
+def test_duration_ruckig_answers_longer_in_scaled_units_is_met():
+    # 1 rad at unit limits, moving on at v0 = -T0/(2T) of the rest-to-rest speed: nothing
+    # blocks T = 4096 T0 (T0 = 4 (1/2)^(1/3) s, the rest-to-rest minimum time), but Ruckig
+    # refuses it unscaled (-101) and, time scaled by 2^14, answers 4 T as if T were
+    # blocked; lower limits (still within these) meet it. Before: "blocked" refused.
+    duration = 4096.0 * 4.0 * 0.5 ** (1.0 / 3.0)
+    v0 = -0.5 / duration
+    plan = scurve(0.0, -1.0, duration, 1.0, 1.0, 1.0, v0=v0)
+    assert plan.duration == duration
+    ones = np.ones(1)
+    check_plan(plan, np.zeros(1), -ones, np.array([v0]), np.zeros(1), ones, ones, ones)
+
+
 def test_extreme_start_acceleration_ruckig_rejects_is_planned():
     arguments = (np.zeros(1), np.ones(1), np.zeros(1), np.array([1e3]), np.ones(1),
                  np.ones(1), np.ones(1))

@@ -4,7 +4,7 @@ import math
 import re
 
 import core_helpers as helpers
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 import hypothesis.strategies as st
 import numpy as np
 import pytest
@@ -17,6 +17,8 @@ TOL = 1e-9
 # Ruckig's own precision at a segment's end (profile.hpp: p_precision, v_precision 1e-8,
 # a_precision 1e-10, absolute); each segment then starts exactly at its via point.
 RUCKIG_PRECISION = np.array([1e-8, 1e-8, 1e-10])
+TINY = 4.45572216e-262  # a step far below Ruckig's precision, which it takes for none
+UNIT = np.ones(1)
 
 
 @st.composite
@@ -53,6 +55,15 @@ def check_path(plan, points, durations, vmax, amax, jmax):
 
 @FAST
 @given(paths())
+# A tiny step took the sign of its neighbour's slope: 52016 s for 1 rad, and not tight
+# (the backend refused a duration that works). First, in the middle, at the end, in one
+# of three joints:
+@example((np.array([[TINY], [0.0], [-1.0]]), UNIT, UNIT, UNIT))
+@example((np.array([[-1.0], [0.0], [TINY], [1.0]]), UNIT, UNIT, UNIT))
+@example((np.array([[-2.0], [-1.0], [0.0], [TINY]]), UNIT, UNIT, UNIT))
+@example((np.array([[0.0, -2.0, 0.0], [0.5, -1.0, 0.1], [1.0, 0.0, 0.2], [1.5, TINY, 0.3],
+                    [2.0, 1.0, 0.4]]), np.array([1.0, 1.0, 2.0]), np.array([1.0, 1.0, 2.0]),
+          np.array([1.0, 1.0, 2.0])))
 def test_heuristic_path_from_its_durations_is_feasible_and_tight(path):
     points, vmax, amax, jmax = path
     try:
@@ -63,8 +74,9 @@ def test_heuristic_path_from_its_durations_is_feasible_and_tight(path):
         return
     plan = scurve_via(points, durations, vmax, amax, jmax)
     check_path(plan, points, durations, vmax, amax, jmax)
+    # Craig's rule, a step within Ruckig's precision counting as none (a stop).
     assert np.allclose(plan.sample(np.concatenate([[0.0], np.cumsum(durations)]))[1],
-                       heuristic_velocities(points, durations), rtol=0.0,
+                       heuristic_velocities(points, durations, resolution=1e-8), rtol=0.0,
                        atol=1e-8 + TOL * vmax.max())
     # The common factor is the smallest that works: a little less fails.
     with pytest.raises(ValueError, match=r'segment \d'):
@@ -101,6 +113,40 @@ def test_given_velocities_give_ruckigs_exact_segment_times(path, data):
     _, velocity, _ = plan.sample(np.concatenate([[0.0], np.cumsum(durations)]))
     assert np.all(np.abs(velocity[:-1] - velocities[:-1]) <= TOL * vmax)
     assert np.all(np.abs(velocity[-1] - velocities[-1]) <= 1e-8 + TOL * vmax)
+
+
+@pytest.mark.parametrize('step', [0.0, 5e-324, TINY, 1e-12, 1e-9])
+def test_a_step_within_ruckigs_precision_is_a_stop(step):
+    # 1 rad rest to rest at unit limits takes T = 4 (1/2)^(1/3) s (jerk-limited only:
+    # peak velocity (1/2)^(2/3), acceleration (1/2)^(1/3)); a step d that Ruckig resolves
+    # 4 (d/2)^(1/3) s, one it takes for none 0 (floored to 1e-6 T). A step within Ruckig's
+    # precision (1e-8) is no motion: point 1 is a stop, as for an exact repeat, and no
+    # factor stretches the path. Before: 16384 T for 1e-262 rad, 298 T for 1e-12 rad.
+    points = np.array([[step], [0.0], [-1.0]])
+    durations = scurve_via_durations(points, 1.0, 1.0, 1.0)
+    whole = 4.0 * 0.5 ** (1.0 / 3.0)
+    first = 4.0 * (0.5 * step) ** (1.0 / 3.0) if step > 1e-15 else 1e-6 * whole
+    np.testing.assert_allclose(durations, [first, whole], rtol=1e-9)
+    plan = scurve_via(points, durations, 1.0, 1.0, 1.0)
+    check_path(plan, points, durations, UNIT, UNIT, UNIT)
+    _, velocity, _ = plan.sample(np.concatenate([[0.0], np.cumsum(durations)]))
+    assert np.all(velocity[:2] == 0.0)
+    with pytest.raises(ValueError, match=r'segment \d'):
+        scurve_via(points, durations * (1.0 - 1e-6), 1.0, 1.0, 1.0)
+    # Given velocities are kept as given: zero, the tiny segment takes any time (a short
+    # one, 1e-9 of the longest); -0.3 rad/s at point 1 Ruckig's exact time to reach it.
+    given = scurve_via_durations(points, 1.0, 1.0, 1.0, np.zeros((3, 1)))
+    np.testing.assert_allclose(given, [1e-9 * whole if step < 1e-15 else first, whole],
+                               rtol=1e-9)
+    moving = np.array([[0.0], [-0.3], [0.0]])
+    given = scurve_via_durations(points, 1.0, 1.0, 1.0, moving)
+    zero = np.zeros(1)
+    for segment in range(2):
+        expected, _ = ruckig_duration(points[segment], points[segment + 1], moving[segment],
+                                      zero, UNIT, UNIT, UNIT, vf=moving[segment + 1])
+        assert given[segment] == pytest.approx(expected, rel=TOL)
+    check_path(scurve_via(points, given, 1.0, 1.0, 1.0, moving), points, given, UNIT, UNIT,
+               UNIT)
 
 
 def test_too_short_segment_is_named_with_its_minimum():

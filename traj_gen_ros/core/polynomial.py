@@ -176,15 +176,21 @@ def quintic_via(
 
 
 def heuristic_velocities(
-    path: np.ndarray, durations: np.ndarray, v0: np.ndarray | float = 0.0
+    path: np.ndarray, durations: np.ndarray, v0: np.ndarray | float = 0.0,
+    resolution: float = 0.0,
 ) -> np.ndarray:
     """
     Craig's via-point velocity rule (§7.3): mean of the neighbouring slopes, or zero.
 
     Zero where the slope changes sign or either neighbouring slope is zero; ``v0`` at
-    the start, rest at the goal. ``path`` is ``(points, joints)``; result in rad/s.
+    the start, rest at the goal. ``path`` is ``(points, joints)``; result in rad/s. A
+    step no larger than ``resolution`` (rad) counts as none: its slope is zero (the
+    S-curve path passes Ruckig's precision, below which a step is no motion).
     """
-    slopes = np.diff(path, axis=0) / durations[:, None]
+    steps = np.diff(path, axis=0)
+    if resolution > 0.0:
+        steps = np.where(np.abs(steps) <= resolution, 0.0, steps)
+    slopes = steps / durations[:, None]
     left, right = slopes[:-1], slopes[1:]
     interior = np.where(left * right > 0.0, 0.5 * (left + right), 0.0)
     start = np.broadcast_to(v0, path[0].shape)[None]

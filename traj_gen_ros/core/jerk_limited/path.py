@@ -7,7 +7,11 @@ Each segment is one fixed-duration, state-to-state seven-phase S-curve (Ruckig w
 time, with zero acceleration there, so position, velocity and acceleration are
 continuous and jerk, acceleration and velocity stay within their limits. Via velocities
 are Craig's heuristic (§7.3, :func:`traj_gen_ros.core.polynomial.heuristic_velocities`) or
-given.
+given. To the heuristic a step within Ruckig's precision (:data:`PRECISION`, 1e-8) is no
+motion, as it is to Ruckig: its slope is zero, so the velocity at both its ends is zero,
+as at a repeated point (counted as a slope, a step of, say, 1e-262 rad beside one of 1 rad
+with the same sign asks for their mean at the point between, which the tiny segment must
+reach with no distance to do it in: hours for a 1 rad path at unit limits).
 
 Units: rad (or m), rad/s, rad/s², rad/s³, s.
 """
@@ -20,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 from traj_gen_ros.core import validation
 from traj_gen_ros.core.jerk_limited.move import fixed_duration
-from traj_gen_ros.core.jerk_limited.problem import LIMIT_NAMES, Move
+from traj_gen_ros.core.jerk_limited.problem import LIMIT_NAMES, Move, PRECISION
 from traj_gen_ros.core.jerk_limited.ruckig_backend import plan_move, scurve_minimum_duration
 from traj_gen_ros.core.polynomial import heuristic_velocities
 from traj_gen_ros.core.trajectory import JerkLimitedTrajectory, Trajectory
@@ -146,7 +150,10 @@ def scurve_via_durations(
     velocities by ``1/c``, so segment ``k`` at scale ``c`` is feasible exactly when the
     segment of duration ``T0_k`` with via velocities ``w`` (those at ``c = 1``) is
     feasible under the limits ``(c v_max, c² a_max, c³ j_max)``; those admit more motions
-    as ``c`` grows, so the feasible factors form one interval ``[c*, ∞)``.
+    as ``c`` grows, so the feasible factors form one interval ``[c*, ∞)`` (a step within
+    :data:`PRECISION` has slope zero at every ``c``; the backend keeps a plan longer than
+    asked only when no attempt meets the duration:
+    :func:`traj_gen_ros.core.jerk_limited.ruckig_backend.plan_move`).
     """
     path = validation.path_points(path)
     _, _, limits, spec = _validated(path, np.ones(len(path) - 1), max_velocity,
@@ -223,9 +230,13 @@ def _via_velocities(path: np.ndarray, durations: np.ndarray,
 
 
 def _heuristic(path: np.ndarray, durations: np.ndarray, start: Start = REST) -> np.ndarray:
-    """Craig's heuristic velocities from ``start``; an overflowing slope gives ``inf``."""
+    """
+    Craig's heuristic velocities from ``start``; an overflowing slope gives ``inf``.
+
+    A step within :data:`PRECISION` has slope zero (Ruckig cannot tell it from none).
+    """
     with np.errstate(over='ignore', invalid='ignore'):  # inf slopes, inf - inf: made inf
-        velocities = heuristic_velocities(path, durations, start.velocity)
+        velocities = heuristic_velocities(path, durations, start.velocity, PRECISION)
     return np.where(np.isnan(velocities), np.inf, velocities)
 
 

@@ -14,6 +14,9 @@ from __future__ import annotations
 
 #: Relative: a plan this close to the asked duration (s) meets it.
 DURATION_TOLERANCE = 1e-13
+#: Ruckig's absolute precision in position (rad or m) and velocity at a plan's end
+#: (profile.hpp: p_precision, v_precision): a step no larger is no motion to it.
+PRECISION = 1e-8
 #: The limits' parameter names, in the order of :attr:`Move.limits`.
 LIMIT_NAMES = ('max_velocity', 'max_acceleration', 'max_jerk')
 

@@ -30,6 +30,7 @@ from traj_gen_ros.core.jerk_limited.problem import (
     Floats,
     LIMIT_NAMES,
     Move,
+    PRECISION,
 )
 from traj_gen_ros.core.trajectory import JerkLimitedTrajectory, Trajectory
 
@@ -51,18 +52,43 @@ def plan_move(move: Move) -> tuple[Trajectory, float]:
 
     With ``move.duration`` set, the plan lasts at least that long (longer when that is
     too short, or blocked). Raises ``ValueError`` when no attempt succeeds.
+
+    Ruckig's answer for a blocked duration is a longer plan. Given directly, it is
+    trusted; from rescaled units, where Ruckig also answers so for durations that are
+    not blocked (a 1 rad move with ``v0 = -0.5/T`` in ``T = 4096 · 32^(1/3)`` s at unit
+    limits, refused directly (-101), time scaled: 4 T), it is kept, for a duration that
+    is not too short, only if no later attempt meets the duration: such a false refusal
+    would break the interval of feasible durations that
+    :func:`traj_gen_ros.core.jerk_limited.path.scurve_via_durations` bisects.
     """
     reason = ''
+    longer = None
     for variant, time_scale, position_scales, needed in _attempts(move):
         solved = _calculate(variant, time_scale, position_scales)
         if isinstance(solved, str):
             reason = reason or solved
-        elif needed is None or solved[1] <= needed * (1.0 + DURATION_TOLERANCE):
+            continue
+        kept = move.duration if needed is None else needed
+        if kept is None or solved[1] <= kept * (1.0 + DURATION_TOLERANCE):
             return solved
+        if needed is None and longer is None:
+            longer = solved
+            if (time_scale == 1.0 and position_scales is None) or _too_short(move):
+                return longer
+    if longer is not None:
+        return longer
     fallback = scurve_fallback.rest_to_rest(move) or scurve_fallback.composed(move, plan_move)
     if fallback is not None and _arrives(fallback[0], move):  # (a stretch may underflow)
         return fallback
     raise ValueError(_failure_message(move, reason))
+
+
+def _too_short(move: Move) -> bool:
+    """Tell whether ``move.duration`` is below the move's minimum time (unknown: no)."""
+    try:
+        return scurve_minimum_duration(move) > move.duration * (1.0 + DURATION_TOLERANCE)
+    except ValueError:
+        return False
 
 
 def _attempts(move: Move) -> Iterator[tuple[Move, float, Floats | None, float | None]]:
@@ -261,9 +287,9 @@ def _arrives(trajectory: Trajectory, move: Move) -> bool:
         velocity = (3.0 * c3 * length + 2.0 * c2) * length + c1
         reach = np.maximum(np.maximum(np.abs(move.start), np.abs(move.goal)), 1.0)
         resolution = 4.0 * np.finfo(float).eps * trajectory.duration
-        return (validation.every(np.abs(position - move.goal) <= 1e-8 + 1e-9 * reach)
+        return (validation.every(np.abs(position - move.goal) <= PRECISION + 1e-9 * reach)
                 and validation.every(np.abs(velocity - move.vf)
-                                     <= 1e-8 + 1e-9 * np.asarray(move.limits[0])
+                                     <= PRECISION + 1e-9 * np.asarray(move.limits[0])
                                      + np.asarray(move.limits[1]) * resolution))
 
 
