@@ -14,6 +14,13 @@ not settle, as its driver reports it); ``--no-velocity`` publishes none, as some
 drivers. A message on ``--freeze`` lists joint indices that stop following from then on
 (empty: all follow again); ``[seconds]`` on ``--pause`` publishes nothing for that long
 (the robot still follows: its driver's state output stalled).
+
+``--integrate``: the commands are velocities (a ``forward_velocity_controller``): each
+joint moves at ``--velocity-scale`` times the latest command (a drive that reaches only
+that fraction of it; 1: exactly) from the moment it arrives until the next one (the
+position is advanced at every command and every step by the time that really passed), and
+publishes that velocity. It holds still until the first command; a frozen or nudged joint
+does not move meanwhile.
 """
 
 import argparse
@@ -51,6 +58,10 @@ def parse(argv):
     parser.add_argument('--no-velocity', action='store_true', help='publish no velocities')
     parser.add_argument('--freeze', default='/robot/freeze')
     parser.add_argument('--pause', default='/robot/pause')
+    parser.add_argument('--integrate', action='store_true',
+                        help='the commands are velocities (rad/s): integrate them')
+    parser.add_argument('--velocity-scale', type=float, default=1.0,
+                        help='with --integrate: the velocity reached per velocity commanded')
     return parser.parse_args(argv)
 
 
@@ -81,10 +92,13 @@ class StandInRobot(Node):
         self.create_subscription(Float64MultiArray, args.freeze, self.on_freeze, 10)
         self.create_subscription(Float64MultiArray, args.pause, self.on_pause, 10)
         self.period = 1.0 / args.rate
+        self.stepped = time.monotonic()
         self.create_timer(self.period, self.step)
 
     def on_command(self, message):
         if len(message.data) == len(self.names):
+            if self.args.integrate:
+                self.integrate(time.monotonic())  # the previous command up to now
             self.command = list(message.data)
 
     def on_nudge(self, message):
@@ -99,12 +113,26 @@ class StandInRobot(Node):
     def on_pause(self, message):
         self.silent_until = time.monotonic() + message.data[0]
 
+    def integrate(self, now):
+        """Move each joint at the scaled latest velocity command since the last call."""
+        elapsed, self.stepped = now - self.stepped, now
+        if self.command is None:
+            return
+        for index in range(len(self.names)):
+            velocity = 0.0
+            if index not in self.frozen and now >= self.held_until[index]:
+                velocity = self.command[index] * self.args.velocity_scale
+            self.position[index] += velocity * elapsed
+            self.velocity[index] = velocity
+
     def step(self):
         now = time.monotonic()
         if self.args.stop_after and now - self.began > self.args.stop_after:
             return
         gain = 1.0 - math.exp(-self.period / self.args.tau)
-        if self.command is not None:
+        if self.args.integrate:
+            self.integrate(now)
+        elif self.command is not None:
             for index in range(len(self.names)):
                 step = 0.0
                 if index not in self.frozen and now >= self.held_until[index]:

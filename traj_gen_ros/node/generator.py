@@ -34,8 +34,9 @@ Interface (all names relative, so namespaces and remapping work):
 * ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``): the node's health, about 1 Hz.
 * ``joint_topic`` (``sensor_msgs/JointState``, best effort): the measured state, in
   (:mod:`~traj_gen_ros.node.robot.joint_feedback`); ``command_out_topic``
-  (``std_msgs/Float64MultiArray`` every tick, or ``trajectory_msgs/JointTrajectory`` per
-  plan: :mod:`~traj_gen_ros.node.robot.commands_out`), out.
+  (``std_msgs/Float64MultiArray`` every tick, positions or velocities, or
+  ``trajectory_msgs/JointTrajectory`` per plan:
+  :mod:`~traj_gen_ros.node.robot.command_publisher`), out.
 """
 
 from __future__ import annotations
@@ -58,27 +59,19 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from traj_gen_ros.node.action.server import create_server
 from traj_gen_ros.node.action.tolerance_parameters import ToleranceParameters
 from traj_gen_ros.node.description.robot_description import NodeLimits
 from traj_gen_ros.node.diagnostics.publisher import CountingAnswers, NodeDiagnostics
 from traj_gen_ros.node.diagnostics.status import RateMeter
-from traj_gen_ros.node.messages.wire import joint_trajectory_cdr
-from traj_gen_ros.node.planning.motion import held, PlannedMotion
+from traj_gen_ros.node.planning.motion import held
 from traj_gen_ros.node.requests.handler import REQUEST_DEPTH, RequestHandler
 from traj_gen_ros.node.requests.thread import NotForTheExecutor, RequestThread
-from traj_gen_ros.node.robot.commands_out import controller_points
+from traj_gen_ros.node.robot.command_publisher import CommandOutput
 from traj_gen_ros.node.robot.joint_feedback import JointFeedback
 from traj_gen_ros.node.robot.measured_state import MeasuredState
-from traj_gen_ros.node.settings.config import (
-    check_command_out_type,
-    Config,
-    FLOAT64_MULTI_ARRAY,
-    initial_state,
-    make_config,
-)
+from traj_gen_ros.node.settings.config import Config, initial_state, make_config
 from traj_gen_ros.node.settings.parameters import (
     declare_parameters,
     ParameterUse,
@@ -120,12 +113,7 @@ class TrajectoryGenerator(Node):
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         publish = (self.create_publisher(JointState, 'joint_states', reliable).publish
                    if publish_states else _nothing)
-        command_type = check_command_out_type(self.get_parameter('command_out_type').value)
-        command_topic = self.get_parameter('command_out_topic').value
-        command_message = (Float64MultiArray if command_type == FLOAT64_MULTI_ARRAY
-                           else JointTrajectory)
-        commands = (self.create_publisher(command_message, command_topic, reliable).publish
-                    if command_topic else None)
+        self._commands = CommandOutput(self, lambda: self._config, measured, reliable)
         self._node_clock = self.get_clock()  # ROS time: use_sim_time makes it follow /clock
         self._rate_meter = RateMeter(self._now_ns() * 1e-9)  # for /diagnostics
         # Speed scaling: the plan clock (node/speed/time_map.py), its inputs (speed_input.py).
@@ -135,8 +123,7 @@ class TrajectoryGenerator(Node):
                               lambda: self._config.period_ns,
                               self._rate_meter.wrap(publish), self.get_logger().error,
                               waiting=measured is not None,
-                              publish_command=(commands if command_message is Float64MultiArray
-                                               else None),
+                              publish_command=self._commands.stream_command,
                               time_map=self._time_map,
                               publish_factor=SpeedScalingInput.output(self))
         self.context.on_shutdown(self._stream.stopping.set)  # SIGINT/SIGTERM: stream ends
@@ -144,8 +131,7 @@ class TrajectoryGenerator(Node):
         self._requests = RequestHandler(
             lambda: self._config, self._stream, self._answers, self._now_ns,
             self.get_logger().error, refusal=measured.refusal if measured else lambda: None,
-            on_plan=(self._plan_publisher(commands) if command_message is JointTrajectory
-                     and commands else lambda start_ns, motion: None))
+            on_plan=self._commands.on_plan)
         #: The measured state in (``joint_topic``), or None (standalone).
         self.feedback = (JointFeedback(self, measured, self._stream, self._requests)
                          if measured else None)
@@ -195,17 +181,6 @@ class TrajectoryGenerator(Node):
         self.get_logger().info(
             f'streaming {len(self._config.joints)} joints at {self._config.rate_hz:g} Hz '
             f'({priority}), profile {self._config.profile}{waiting}')
-
-    def _plan_publisher(self, publish: Callable[[bytes], None]
-                        ) -> Callable[[int, PlannedMotion], None]:
-        """Publish each plan spliced in as a JTC's ``JointTrajectory`` (``command_out_type``)."""
-        def publish_plan(start_ns: int, motion: PlannedMotion) -> None:
-            times_ns, *values = controller_points(motion)
-            if not all(np.isfinite(v).all() for v in values if v is not None):
-                self.get_logger().error('command_out_topic: a non-finite point: not sent')
-                return
-            publish(joint_trajectory_cdr(start_ns, self._config.joints, times_ns, *values))
-        return publish_plan
 
     def _measured_state(self, publish_states: bool) -> MeasuredState | None:
         """Check the ``joint_topic`` parameters; None when standalone; ValueError if bad."""
@@ -287,9 +262,10 @@ class TrajectoryGenerator(Node):
         self._stream.set_scaling_limits(self._config.max_acceleration, self._config.jerk_limit)
 
     def destroy_node(self) -> None:
-        """Stop the request and stream threads, destroy the action server, then the node."""
+        """Stop the request and stream threads, send a last zero velocity command, destroy."""
         self._request_thread.stop()
         self._stream.stop()
+        self._commands.send_zero()  # the stream's last tick is out: nothing follows it
         if self.follow_joint_trajectory is not None:
             self.follow_joint_trajectory.destroy()
         super().destroy_node()

@@ -67,7 +67,7 @@ def test_a_failed_command_publish_still_marks_the_setpoint_sent():
     clock = [10**12]
     published = []
 
-    def failing(data):
+    def failing(position, velocity):
         raise RuntimeError('command publisher gone')
     stream = Stream(held([0.1, 0.2]), ['a', 'b'], lambda: clock[0], lambda: PERIOD,
                     published.append, print, publish_command=failing)

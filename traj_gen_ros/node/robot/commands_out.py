@@ -4,7 +4,9 @@
 * ``std_msgs/Float64MultiArray`` (``forward_command_controller``,
   ``position_controllers/JointGroupPositionController`` on ``<controller>/commands``):
   the setpoint positions in ``joints`` order at every stream tick
-  (:func:`traj_gen_ros.node.messages.wire.float64_multi_array_cdr`, from the stream thread);
+  (:func:`position_command`, from the stream thread); with ``command_out_interface``
+  ``velocity`` (a ``forward_velocity_controller``) the setpoint velocities, corrected by
+  the position error (:class:`VelocityCommand`);
 * ``trajectory_msgs/JointTrajectory`` (a ``joint_trajectory_controller`` on
   ``~/joint_trajectory``): each accepted plan once, as :func:`controller_points` gives it.
 
@@ -18,13 +20,26 @@ Accelerations are given when the plan's acceleration is continuous at every brea
 a cubic through via points, the second-order brake) has pieces of degree <= 3 and is
 sent with positions and velocities, which a cubic Hermite reproduces exactly.
 
+Velocity commands (issue 28): ``v = clip(v_ref + c, -max_velocity, max_velocity)`` per
+joint, ``c = k_p·(q_ref − q_measured)`` with ``k_p`` the ``position_gain`` (1/s) while a
+measured state at most 0.1 s old is present, else 0: the P case, with full feed-forward,
+of ``joint_trajectory_controller``'s ``ff_velocity_scale·v_ref + PID`` on a velocity
+interface; ``k_p = 0`` is the feed-forward alone, as MoveIt Servo's
+``publish_joint_velocities``. The correction may fall to 0 at once (the measured state
+lost or stale, a re-seed that puts the setpoint where the arm is), but grows by at most
+``max_acceleration·period`` per tick: a measured state that becomes fresh again, after the
+arm drifted, or a setpoint that steps away from the arm, never makes the command jump.
+
 Units: rad (or m), rad/s, rad/s², s; ns where named.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from traj_gen_ros.core.trajectory import Trajectory
+from traj_gen_ros.node.messages.wire import float64_multi_array_cdr
 from traj_gen_ros.node.planning.motion import PlannedMotion
 
 #: A hold (a plan of no duration) is sent as two points this far apart (s), at rest.
@@ -77,3 +92,67 @@ def controller_points(motion: PlannedMotion
     if not acceleration_continuous(plan):
         accelerations = None
     return times_ns, positions, velocities, accelerations
+
+
+def position_command(position: np.ndarray, velocity: np.ndarray) -> bytes:
+    """Write the ``Float64MultiArray`` of a position interface: the setpoint's positions."""
+    del velocity
+    return float64_multi_array_cdr(position)
+
+
+class VelocityCommand:
+    """A velocity interface's command each tick: feed-forward plus the position error."""
+
+    def __init__(self, gain: np.ndarray, max_velocity: Callable[[], np.ndarray],
+                 max_acceleration: Callable[[], np.ndarray], period: Callable[[], float],
+                 measured_position: Callable[[], np.ndarray | None]) -> None:
+        """
+        Correct by ``gain`` (1/s, one per joint, each >= 0) toward ``measured_position()``.
+
+        :param max_velocity: the velocity limits in force, rad/s (read every tick: they
+            may change at run time): the command never exceeds them.
+        :param max_acceleration: rad/s²: the correction grows by at most this times
+            ``period()`` (s, the stream period) per tick.
+        :param measured_position: the measured positions (rad) while fresh, else None
+            (:meth:`MeasuredState.fresh_position`).
+        """
+        self.gain = np.array(gain, dtype=float)
+        self._max_velocity = max_velocity
+        self._max_acceleration = max_acceleration
+        self._period = period
+        self._measured = measured_position
+        self._corrects = bool(np.any(self.gain > 0.0))
+        #: The correction of the last command (rad/s).
+        self.correction = np.zeros_like(self.gain)
+
+    def __call__(self, position: np.ndarray, velocity: np.ndarray) -> bytes:
+        """
+        Write the ``Float64MultiArray`` of the setpoint (``position`` rad, ``velocity`` rad/s).
+
+        Called from the stream thread each tick (a few microseconds: arrays of one value
+        per joint).
+        """
+        return float64_multi_array_cdr(self.command(position, velocity))
+
+    def command(self, position: np.ndarray, velocity: np.ndarray) -> np.ndarray:
+        """Return the velocity (rad/s) to command for the setpoint (see the module)."""
+        measured = self._measured() if self._corrects else None
+        if measured is None:
+            self.correction = np.zeros_like(self.gain)
+            command = velocity
+        else:
+            wanted = self.gain * (position - measured)
+            step = self._max_acceleration() * self._period()
+            previous = self.correction
+            # Anywhere between the last correction and 0 at once, beyond it by one step
+            # (np.minimum/np.maximum: np.clip costs several times as much on a few values).
+            self.correction = np.minimum(np.maximum(wanted, np.minimum(previous, 0.0) - step),
+                                         np.maximum(previous, 0.0) + step)
+            command = velocity + self.correction
+        limit = self._max_velocity()
+        return np.minimum(np.maximum(command, -limit), limit)
+
+    def zero(self) -> bytes:
+        """Write the all-zero command (the node's last, on SIGINT/SIGTERM)."""
+        self.correction = np.zeros_like(self.gain)
+        return float64_multi_array_cdr(np.zeros_like(self.gain))

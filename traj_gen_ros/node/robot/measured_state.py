@@ -11,6 +11,9 @@ With ``joint_topic`` set, the arm is the reference (docs/node-design.md, "Measur
 * no valid message for ``joint_topic_timeout`` s (:meth:`MeasuredState.timed_out`): the node
   brakes and refuses requests until one arrives.
 
+* :meth:`MeasuredState.fresh_position`: the positions while at most :data:`FRESH_AGE` s
+  old and not lost, for the velocity command's position correction.
+
 A message lacking a joint or carrying a non-finite position is ignored (counted). Times
 are ``time.monotonic()`` seconds (the timeout is wall time even under ``use_sim_time``).
 
@@ -25,6 +28,9 @@ import math
 import numpy as np
 from traj_gen_ros.core.validation import per_joint
 from traj_gen_ros.node.diagnostics.status import ERROR, OK, WARN
+
+#: A measured state older than this (s) corrects no velocity command (issue 28).
+FRESH_AGE = 0.1
 
 
 def check_timeout(value: float) -> float:
@@ -106,6 +112,20 @@ class MeasuredState:
         """Tell whether no valid message arrived for ``timeout`` s (after the first one)."""
         return (self.timeout > 0.0 and self.position is not None
                 and now - self.received_at > self.timeout)
+
+    def fresh_position(self, now: float, max_age: float = FRESH_AGE) -> np.ndarray | None:
+        """
+        Give the latest positions (rad) if at most ``max_age`` s old and not lost, else None.
+
+        ``now`` is ``time.monotonic()`` (s). Called on the stream thread while the executor
+        thread reads messages: :meth:`read` replaces :attr:`position` whole (never in
+        place), so the array given is one message's; a message arriving meanwhile makes the
+        age judged at most one message off.
+        """
+        position = self.position
+        if position is None or self.lost or now - self.received_at > max_age:
+            return None
+        return position
 
     def refusal(self) -> str | None:
         """Give the reason every request is refused now, or ``None``."""

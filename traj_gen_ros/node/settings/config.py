@@ -6,7 +6,7 @@ The node's parameters, checked together into one :class:`Config` (no ROS here).
 the parameter and saying what is valid. The node calls it at start-up (a bad value ends
 the node with exit status 1) and before every parameter change (a bad value is refused).
 
-Units: rad/s, rad/s², rad/s³, Hz.
+Units: rad/s, rad/s², rad/s³, Hz; ``position_gain`` 1/s.
 """
 
 from __future__ import annotations
@@ -32,6 +32,12 @@ DEFAULT_TIMEOUT = 0.5
 FLOAT64_MULTI_ARRAY = 'std_msgs/Float64MultiArray'
 JOINT_TRAJECTORY = 'trajectory_msgs/JointTrajectory'
 COMMAND_OUT_TYPES = (FLOAT64_MULTI_ARRAY, JOINT_TRAJECTORY)
+#: ``command_out_interface``: what a ``Float64MultiArray`` command carries.
+POSITION = 'position'
+VELOCITY = 'velocity'
+COMMAND_OUT_INTERFACES = (POSITION, VELOCITY)
+#: Default ``position_gain`` (1/s): velocity commands are the setpoint's velocity alone.
+DEFAULT_POSITION_GAIN = 0.0
 
 
 @dataclass(frozen=True)
@@ -154,3 +160,30 @@ def check_command_out_type(value: str) -> str:
         raise ValueError(f'command_out_type must be one of {", ".join(COMMAND_OUT_TYPES)}; '
                          f'got {value!r}')
     return value
+
+
+def check_command_out_interface(value: str, command_type: str) -> str:
+    """
+    Check ``command_out_interface`` against ``command_out_type``; ``ValueError`` if bad.
+
+    ``velocity`` needs ``std_msgs/Float64MultiArray`` (a ``forward_velocity_controller``):
+    a ``JointTrajectory`` for a JTC carries positions and velocities already.
+    """
+    if value not in COMMAND_OUT_INTERFACES:
+        raise ValueError(f'command_out_interface must be one of '
+                         f'{", ".join(COMMAND_OUT_INTERFACES)}; got {value!r}')
+    if value == VELOCITY and command_type != FLOAT64_MULTI_ARRAY:
+        raise ValueError(f'command_out_interface velocity needs command_out_type '
+                         f'{FLOAT64_MULTI_ARRAY} (the commands of a forward_velocity_controller), '
+                         f'got {command_type} (a joint_trajectory_controller takes the plan '
+                         f'itself: use command_out_interface position)')
+    return value
+
+
+def check_position_gain(joints: Sequence[str], value: object) -> np.ndarray:
+    """
+    Check ``position_gain`` (1/s): one value or one per joint, each finite and >= 0.
+
+    Returns one gain per joint; ``ValueError`` naming the first joint out of range.
+    """
+    return per_joint('position_gain', value, len(joints), 'non-negative', joints=tuple(joints))

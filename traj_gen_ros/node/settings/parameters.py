@@ -8,9 +8,9 @@ Every parameter is declared *statically typed*: its type never changes, so
   /trajectory_generator rate_hz 50`` (an integer on the command line) sets ``rate_hz`` to
   ``50.0``, and an integer in a parameters file is read the same way;
 * a per-joint parameter (``max_velocity``, ``max_acceleration``, ``lspb_acceleration``,
-  ``max_jerk``, ``min_position``, ``max_position``) is a double array: one value for all
-  joints or one per joint. A single number (integer or double) is stored as a one-element
-  array;
+  ``max_jerk``, ``min_position``, ``max_position``, ``position_gain``, …: every name in
+  :data:`DOUBLE_ARRAYS`) is a double array: one value for all joints or one per joint. A
+  single number (integer or double) is stored as a one-element array;
 * any other type (a string, a bool, …) is refused by rclpy with
   ``Wrong parameter type, expected 'Type.DOUBLE' got 'Type.STRING'``, and the parameter
   keeps its value.
@@ -22,7 +22,7 @@ per-joint arrays state their rule in ``description`` and ``additional_constraint
 (rclpy checks no range on arrays; :mod:`traj_gen_ros.node.settings.config` and
 :mod:`traj_gen_ros.node.description.robot_description` do).
 
-Units: rad (or m), rad/s, rad/s², rad/s³, Hz.
+Units: rad (or m), rad/s, rad/s², rad/s³, Hz; ``position_gain`` 1/s.
 """
 
 from __future__ import annotations
@@ -40,13 +40,16 @@ from rcl_interfaces.msg import (
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from traj_gen_ros.node.settings.config import (
+    COMMAND_OUT_INTERFACES,
     COMMAND_OUT_TYPES,
     DEFAULT_MAX_JERK,
+    DEFAULT_POSITION_GAIN,
     DEFAULT_STATE_TOLERANCE,
     DEFAULT_TIMEOUT,
     FLOAT64_MULTI_ARRAY,
     MAX_RATE_HZ,
     MIN_RATE_HZ,
+    POSITION,
     PROFILES,
 )
 
@@ -58,7 +61,7 @@ DOUBLES = ('rate_hz', 'joint_topic_timeout', 'allowed_start_tolerance', 'goal_ti
 #: Per-joint parameters, declared as double arrays: one number is stored as ``[number]``.
 DOUBLE_ARRAYS = ('initial_positions', 'max_velocity', 'max_acceleration', 'lspb_acceleration',
                  'max_jerk', 'min_position', 'max_position', 'state_tolerance', 'path_tolerance',
-                 'goal_tolerance')
+                 'goal_tolerance', 'position_gain')
 
 _DOUBLE = Parameter.Type.DOUBLE
 _DOUBLE_ARRAY = Parameter.Type.DOUBLE_ARRAY
@@ -146,6 +149,19 @@ def descriptors(joint_count: int) -> dict[str, tuple[object, ParameterDescriptor
                         'for a joint_trajectory_controller (read only).',
             type=ParameterType.PARAMETER_STRING, read_only=True,
             additional_constraints=' | '.join(COMMAND_OUT_TYPES))),
+        'command_out_interface': (POSITION, ParameterDescriptor(
+            description='What a std_msgs/Float64MultiArray command carries: the setpoint '
+                        'positions, or its velocities (+ position_gain times the position '
+                        'error) for a forward_velocity_controller (read only).',
+            type=ParameterType.PARAMETER_STRING, read_only=True,
+            additional_constraints=' | '.join(COMMAND_OUT_INTERFACES))),
+        'position_gain': ([DEFAULT_POSITION_GAIN], ParameterDescriptor(
+            description=f'command_out_interface velocity: the command is the setpoint '
+                        f'velocity + this times (setpoint - measured position) while the '
+                        f'measured state is fresh ({PER_JOINT}; each finite and >= 0, 0: '
+                        f'feed-forward only; 1/s; read only).',
+            type=ParameterType.PARAMETER_DOUBLE_ARRAY, read_only=True,
+            additional_constraints=f'{PER_JOINT}; each finite and >= 0; 1/s')),
         'joint_topic_timeout': (DEFAULT_TIMEOUT, ParameterDescriptor(
             description='No valid measured state for this long, s: brake and refuse '
                         'requests until it returns; 0: never (read only).',

@@ -37,11 +37,7 @@ from collections.abc import Callable, Sequence
 import threading
 
 import numpy as np
-from traj_gen_ros.node.messages.wire import (
-    float64_multi_array_cdr,
-    joint_names_cdr,
-    joint_state_cdr,
-)
+from traj_gen_ros.node.messages.wire import joint_names_cdr, joint_state_cdr
 from traj_gen_ros.node.planning.motion import held, PlannedMotion, State
 from traj_gen_ros.node.speed.time_map import TimeMap
 from traj_gen_ros.node.stream.schedule import Schedule
@@ -58,7 +54,7 @@ class Stream:
                  now_ns: Callable[[], int], period_ns: Callable[[], int],
                  publish: Callable[[bytes], None], on_error: Callable[[str], None],
                  waiting: bool = False,
-                 publish_command: Callable[[bytes], None] | None = None,
+                 publish_command: Callable[[np.ndarray, np.ndarray], None] | None = None,
                  time_map: TimeMap | None = None,
                  publish_factor: Callable[[float], None] | None = None) -> None:
         """
@@ -70,8 +66,9 @@ class Stream:
         :param now_ns: the node clock, integer nanoseconds.
         :param period_ns: the current stream period (read every tick: ``rate_hz`` may change).
         :param publish: sends one serialised ``JointState``.
-        :param publish_command: sends the same setpoint's positions as a serialised
-            ``Float64MultiArray`` (``command_out_topic``), or None.
+        :param publish_command: sends the command of the same setpoint, given its positions
+            (rad) and velocities (rad/s): ``command_out_topic``'s ``Float64MultiArray``
+            (:mod:`traj_gen_ros.node.robot.commands_out` writes it), or None.
         :param on_error: logs a failed publish (the stream goes on).
         :param time_map: the speed scaling ramp and plan clock (None: a factor of 1).
         :param publish_factor: forwards the effective factor when it changes (from the
@@ -298,7 +295,7 @@ class Stream:
         self._publish(joint_state_cdr(now_ns, self._names_cdr, position, velocity))
         try:
             if self._publish_command is not None:
-                self._publish_command(float64_multi_array_cdr(position))
+                self._publish_command(position, velocity)
             if self._publish_factor is not None and factor != self._forwarded:
                 self._forwarded = factor
                 self._publish_factor(factor)
