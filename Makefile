@@ -58,7 +58,7 @@ FUZZ_SEEDS ?= 5 6 7
 fuzz: $(STAMP)
 	for seed in $(FUZZ_SEEDS); do \
 		FUZZ_SEED=$$seed FUZZ_CASES=20000 FUZZ_DDS_CASES=3000 \
-			$(PY) -m pytest -q -s test/dds/test_reliability_fuzz.py || exit 1; \
+			$(PY) -m pytest -q -s test/node/planning/test_pipeline_fuzz.py test/dds/test_reliability_fuzz.py || exit 1; \
 	done
 	$(PY) benchmarks/flood.py
 

@@ -1,4 +1,4 @@
-"""The numpy CDR writers produce the messages rclpy itself would send, field by field."""
+"""The CDR bytes: the writers match rclpy field by field; the readers take what rclpy wrote."""
 
 from builtin_interfaces.msg import Duration
 from hypothesis import given, settings
@@ -11,6 +11,9 @@ from traj_gen_ros.node.messages.wire import (
     joint_names_cdr,
     joint_state_cdr,
     joint_trajectory_cdr,
+    peek_via_points,
+    read_goal,
+    read_joint_state,
 )
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
@@ -81,3 +84,47 @@ def test_joint_state_bytes_match_rclpy(joint_names, stamp_ns, seed):
     expected.header.stamp.sec, expected.header.stamp.nanosec = divmod(stamp_ns, 10**9)
     assert deserialize_message(wire, JointState) == expected
     assert len(wire) == len(serialize_message(expected))  # same layout, padding included
+
+
+def test_peek_via_points_reads_frame_id_and_count_off_the_wire():
+    message = JointTrajectory(joint_names=['a', 'bb', 'ccc'],
+                              points=[JointTrajectoryPoint(positions=[1.0])] * 7)
+    message.header.frame_id = 'tag-17'
+    data = serialize_message(message)
+    assert peek_via_points(data) == ('tag-17', 7)
+    assert peek_via_points(data[:12]) == ('', 0)  # truncated: deserialising refuses it
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.text(max_size=12), st.lists(st.text(max_size=9), max_size=7),
+       st.lists(st.floats(allow_nan=True, allow_infinity=True), max_size=7),
+       st.lists(st.floats(-10.0, 10.0), max_size=3), st.integers(0, 2 ** 31 - 1))
+def test_read_goal_reads_what_rclpy_serialises(frame_id, names, positions, velocities, sec):
+    message = JointState(name=names, position=positions, velocity=velocities)
+    message.header.frame_id = frame_id
+    message.header.stamp.sec = sec
+    data = serialize_message(message)
+    expected = deserialize_message(data, JointState)  # rclpy's own reading ('a\0b' is 'a')
+    read_frame, read_names, read_positions = read_goal(data)
+    assert (read_frame, read_names) == (expected.header.frame_id, list(expected.name))
+    np.testing.assert_array_equal(read_positions, np.array(expected.position, dtype=float))
+    assert read_positions.dtype == np.float64 and read_positions.flags.writeable
+    *same, read_velocities = read_joint_state(data)  # the measured state's: and velocities
+    assert same[:2] == [read_frame, read_names]
+    np.testing.assert_array_equal(same[2], read_positions)
+    np.testing.assert_array_equal(read_velocities, np.array(expected.velocity, dtype=float))
+
+
+def test_read_goal_leaves_what_it_cannot_read_to_rclpy():
+    message = JointState(name=['a', 'b'], position=[1.0, 2.0])
+    data = serialize_message(message)
+    assert read_goal(data[:-24]) is None  # cut inside the positions
+    assert read_goal(data[:14]) is None  # cut inside a name
+    moving = serialize_message(JointState(name=['a', 'b'], position=[1.0, 2.0],
+                                          velocity=[3.0, 4.0]))
+    assert read_joint_state(moving)[3].tolist() == [3.0, 4.0]
+    assert read_joint_state(moving[:-16]) is None  # cut inside the velocities
+    assert read_goal(b'\x00\x00' + data[2:]) is None  # big-endian CDR: rclpy reads it
+    corrupt = bytearray(data)
+    corrupt[20:22] = b'\xff\xfe'  # not UTF-8 inside the first name
+    assert read_goal(bytes(corrupt)) is None

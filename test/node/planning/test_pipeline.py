@@ -1,100 +1,21 @@
-"""ROS-free request handling: parameter checks, request parsing, plans, schedule."""
+"""ROS-free planning: goals, via points, stops and S-curves through the pipeline; the schedule."""
 
-import math
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
 import numpy as np
+from planning_rig import config, JOINTS, rest
 import pytest
-from rclpy.serialization import deserialize_message, serialize_message
-from sensor_msgs.msg import JointState
 from traj_gen_ros import limit_violation, min_time, scurve_brake
 from traj_gen_ros.node.messages.parsing import (
     GoalRequest,
-    parse_goal,
     parse_via,
     RequestError,
 )
-from traj_gen_ros.node.messages.wire import peek_via_points, read_goal, read_joint_state
 from traj_gen_ros.node.planning.motion import held, State
 from traj_gen_ros.node.planning.pipeline import plan_request, plan_stop
 from traj_gen_ros.node.planning.sampling import sample_grid, sample_motion
-from traj_gen_ros.node.planning.via_path import via_points
-from traj_gen_ros.node.settings.config import make_config
 from traj_gen_ros.node.stream.schedule import Schedule
-from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
-
-JOINTS = ['a', 'b', 'c']
-
-
-def config(**changes):
-    values = {'joints': JOINTS, 'rate_hz': 100.0, 'profile': 'quintic',
-              'via_velocities': 'heuristic', 'max_velocity': [1.0, 2.0, 3.0],
-              'max_acceleration': 4.0, 'lspb_acceleration': 0.0}
-    values.update(changes)
-    return make_config(**values)
-
-
-def rest(position=(0.0, 0.0, 0.0)):
-    position = np.array(position, dtype=float)
-    return State(position, np.zeros(3), np.zeros(3))
-
-
-def test_config_broadcasts_and_replaces_zero_lspb_acceleration():
-    cfg = config(lspb_acceleration=[0.0, 1.0, 0.0])
-    assert cfg.max_acceleration.tolist() == [4.0, 4.0, 4.0]
-    assert cfg.lspb_acceleration.tolist() == [4.0, 1.0, 4.0]
-    assert cfg.profile_acceleration.tolist() == [4.0, 4.0, 4.0]
-    assert config(profile='lspb', lspb_acceleration=2).profile_acceleration.tolist() == [2.0] * 3
-
-
-@pytest.mark.parametrize('changes, reason', [
-    ({'joints': []}, 'joints is empty'),
-    ({'joints': ['a', 'a']}, r"joints lists \['a'\] more than once"),
-    ({'rate_hz': True}, 'rate_hz must be a number'),
-    ({'max_velocity': [1.0, math.nan, 1.0]},
-     "max_velocity must be finite and > 0; joint 'b' has nan"),
-    ({'max_acceleration': [1.0, 2.0]}, 'has 2 values but there are 3 joints'),
-    ({'lspb_acceleration': -1.0}, ('lspb_acceleration must be finite and >= 0; '
-                                   "joint 'a' has -1.0")),
-    ({'max_jerk': 0.0}, "max_jerk must be finite and > 0; joint 'a' has 0.0"),
-    ({'max_jerk': [1.0, -2.0, 1.0]}, "max_jerk must be finite and > 0; joint 'b' has -2.0"),
-    ({'profile': 'septic'}, 'profile must be one of lspb, cubic, quintic, scurve'),
-])
-def test_config_errors_name_the_parameter(changes, reason):
-    with pytest.raises(ValueError, match=reason):
-        config(**changes)
-
-
-def test_parse_goal_and_via_errors():
-    assert parse_goal(JOINTS, ['c', 'a'], [1.0, 2.0]).joints.tolist() == [2, 0]
-    with pytest.raises(RequestError, match="unknown joint 'x'; known joints"):
-        parse_goal(JOINTS, ['x'], [1.0])
-    with pytest.raises(RequestError, match='strictly increasing: point 2'):
-        parse_via(JOINTS, ['a'], [([0.1], [], [], 1.0), ([0.2], [], [], 2.0),
-                                  ([0.3], [], [], 2.0)])
-    with pytest.raises(RequestError, match='point 0 has time_from_start -1.0 s'):
-        parse_via(JOINTS, ['a'], [([0.1], [], [], -1.0)])
-    with pytest.raises(RequestError, match='accelerations are given without velocities'):
-        parse_via(JOINTS, ['a'], [([0.1], [], [0.0], 1.0)])
-    assert parse_via(JOINTS, ['a'], [([0.1], [], [], 0.0), ([0.2], [], [], 0.0)]).auto_timed
-
-
-def test_via_points_rules():
-    state = State(np.array([0.0, 1.0, 2.0]), np.array([0.5, 0, 0]), np.zeros(3))
-    hold = np.array([9.0, 1.0, 2.0])
-    # time > 0: the setpoint is prepended; unnamed joints go to ``hold``.
-    request = parse_via(JOINTS, ['b'], [([1.5], [], [], 1.0)])
-    points, times, _, _ = via_points(JOINTS, state, hold, request)
-    assert points.tolist() == [[0.0, 1.0, 2.0], [9.0, 1.5, 2.0]] and times.tolist() == [0, 1]
-    # time 0 at the current position: it is the start.
-    request = parse_via(JOINTS, ['b'], [([1.0], [], [], 0.0), ([1.5], [], [], 1.0)])
-    points, times, _, _ = via_points(JOINTS, state, hold, request)
-    assert len(points) == 2 and times.tolist() == [0, 1]
-    # time 0 elsewhere: refused, naming the joint.
-    request = parse_via(JOINTS, ['b'], [([1.2], [], [], 0.0), ([1.5], [], [], 1.0)])
-    with pytest.raises(RequestError, match="joint 'b' is at 1 rad, not 1.2"):
-        via_points(JOINTS, state, hold, request)
 
 
 def test_goal_plan_matches_core_min_time_and_holds_unnamed_joints():
@@ -208,50 +129,6 @@ def test_sample_grid():
     plan = min_time(0.0, 0.3, 1.0, 4.0, profile='quintic')
     times = sample_grid(plan, 100.0)
     assert times[-1] == plan.duration and np.allclose(np.diff(times)[:-1], 0.01)
-
-
-def test_peek_via_points_reads_frame_id_and_count_off_the_wire():
-    message = JointTrajectory(joint_names=['a', 'bb', 'ccc'],
-                              points=[JointTrajectoryPoint(positions=[1.0])] * 7)
-    message.header.frame_id = 'tag-17'
-    data = serialize_message(message)
-    assert peek_via_points(data) == ('tag-17', 7)
-    assert peek_via_points(data[:12]) == ('', 0)  # truncated: deserialising refuses it
-
-
-@settings(max_examples=200, deadline=None)
-@given(st.text(max_size=12), st.lists(st.text(max_size=9), max_size=7),
-       st.lists(st.floats(allow_nan=True, allow_infinity=True), max_size=7),
-       st.lists(st.floats(-10.0, 10.0), max_size=3), st.integers(0, 2 ** 31 - 1))
-def test_read_goal_reads_what_rclpy_serialises(frame_id, names, positions, velocities, sec):
-    message = JointState(name=names, position=positions, velocity=velocities)
-    message.header.frame_id = frame_id
-    message.header.stamp.sec = sec
-    data = serialize_message(message)
-    expected = deserialize_message(data, JointState)  # rclpy's own reading ('a\0b' is 'a')
-    read_frame, read_names, read_positions = read_goal(data)
-    assert (read_frame, read_names) == (expected.header.frame_id, list(expected.name))
-    np.testing.assert_array_equal(read_positions, np.array(expected.position, dtype=float))
-    assert read_positions.dtype == np.float64 and read_positions.flags.writeable
-    *same, read_velocities = read_joint_state(data)  # the measured state's: and velocities
-    assert same[:2] == [read_frame, read_names]
-    np.testing.assert_array_equal(same[2], read_positions)
-    np.testing.assert_array_equal(read_velocities, np.array(expected.velocity, dtype=float))
-
-
-def test_read_goal_leaves_what_it_cannot_read_to_rclpy():
-    message = JointState(name=['a', 'b'], position=[1.0, 2.0])
-    data = serialize_message(message)
-    assert read_goal(data[:-24]) is None  # cut inside the positions
-    assert read_goal(data[:14]) is None  # cut inside a name
-    moving = serialize_message(JointState(name=['a', 'b'], position=[1.0, 2.0],
-                                          velocity=[3.0, 4.0]))
-    assert read_joint_state(moving)[3].tolist() == [3.0, 4.0]
-    assert read_joint_state(moving[:-16]) is None  # cut inside the velocities
-    assert read_goal(b'\x00\x00' + data[2:]) is None  # big-endian CDR: rclpy reads it
-    corrupt = bytearray(data)
-    corrupt[20:22] = b'\xff\xfe'  # not UTF-8 inside the first name
-    assert read_goal(bytes(corrupt)) is None
 
 
 def test_limit_refusals_name_joints_by_their_ros_names():
