@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from stream_rig import make_stream, PERIOD, run_until, tick
 from traj_gen_ros.node.action.active_goal import ActiveGoal
+from traj_gen_ros.node.action.goal_book import GoalBook
 from traj_gen_ros.node.action.goal_points import (
     GOAL_TOLERANCE_VIOLATED,
     INVALID_GOAL,
@@ -21,7 +22,6 @@ from traj_gen_ros.node.action.goal_points import (
     SUCCESSFUL,
 )
 from traj_gen_ros.node.action.monitor import (
-    GoalBook,
     GoalMonitor,
     MONITOR_PERIOD,
     STALE_AFTER,

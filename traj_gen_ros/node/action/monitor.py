@@ -20,34 +20,23 @@ monitor what it uses (the measured arm, the brake, the logger, how to end a goal
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
-import threading
 from typing import Protocol
 
 import numpy as np
 from rclpy.action.server import ServerGoalHandle
 from traj_gen_ros.node.action.active_goal import ActiveGoal
+from traj_gen_ros.node.action.goal_book import GoalBook, KIND
 from traj_gen_ros.node.action.goal_points import INVALID_GOAL, PATH_TOLERANCE_VIOLATED, SUCCESSFUL
 from traj_gen_ros.node.action.tolerances import ABORTED, CANCELED, outcome
 from traj_gen_ros.node.planning.motion import State
 from traj_gen_ros.node.settings.config import Config
 from traj_gen_ros.node.stream.stream import Stream
 
-KIND = 'follow_joint_trajectory'
 #: The monitor's period (s): feedback rate and how soon a result follows its cause.
 MONITOR_PERIOD = 0.02
 #: A measured state older than this (s) is not checked against the tolerances: until
 #: ``joint_topic_timeout`` says it is lost, it would pass for a deviation.
 STALE_AFTER = 0.1
-
-
-@dataclass
-class GoalBook:
-    """The goals both threads see, under ``lock``: the active one, those replaced."""
-
-    lock: threading.Lock = field(default_factory=threading.Lock)
-    active: ActiveGoal | None = None
-    replaced: list[ActiveGoal] = field(default_factory=list)
 
 
 class Logger(Protocol):

@@ -21,7 +21,7 @@ The goal, cancel and result services are served by the request thread
 result are set by an execute callback scheduled on the executor only when the goal ends
 (:meth:`ActionServer.notify_execute`): Jazzy's executor resumes an ``async`` one on every
 spin, a busy loop beside the stream thread. What the two threads share (the active goal,
-the replaced ones) is a :class:`~traj_gen_ros.node.action.monitor.GoalBook`; a goal is
+the replaced ones) is a :class:`~traj_gen_ros.node.action.goal_book.GoalBook`; a goal is
 watched once it is fully started, and an end decided before its handle exists is applied
 as soon as it does.
 """
@@ -37,19 +37,14 @@ from rclpy.action.server import GoalEvent, ServerGoalHandle
 from rclpy.callback_groups import CallbackGroup
 from rclpy.node import Node
 from traj_gen_ros.node.action.active_goal import ActiveGoal, read_goal_message
+from traj_gen_ros.node.action.goal_book import GoalBook, KIND, OWN_KINDS
 from traj_gen_ros.node.action.goal_points import (
     GoalError,
     INVALID_GOAL,
     plan_trajectory_goal,
     TrajectoryGoal,
 )
-from traj_gen_ros.node.action.monitor import (
-    GoalBook,
-    GoalMonitor,
-    KIND,
-    MeasuredArm,
-    MONITOR_PERIOD,
-)
+from traj_gen_ros.node.action.monitor import GoalMonitor, MeasuredArm, MONITOR_PERIOD
 from traj_gen_ros.node.action.tolerance_parameters import ToleranceParameters
 from traj_gen_ros.node.action.tolerances import ABORTED, CANCELED, SUCCEEDED
 from traj_gen_ros.node.planning.motion import PlannedMotion, State
@@ -66,14 +61,6 @@ try:
 except ImportError as _error:  # no control_msgs: the node runs without the action
     FollowJointTrajectory = None
     UNAVAILABLE = str(_error)
-
-#: The requests the action itself makes (braking on a cancel or a path violation).
-OWN_KINDS = ('follow_joint_trajectory_cancel', 'follow_joint_trajectory_brake')
-_REPLACED_BY = {'goal': 'a ~/goal request', 'via_points': 'a ~/via_points request',
-                'stop': 'a ~/stop call', KIND: 'a newer follow_joint_trajectory goal'}
-#: What happens to the arm when a goal is replaced: the new request's motion, or a brake.
-_THEN = {'stop': 'the arm brakes to rest'}
-
 
 @dataclass(frozen=True)
 class GoalOutcome:
@@ -126,7 +113,6 @@ class FollowJointTrajectoryServer:
         self._log = node.get_logger()
         self._book = GoalBook()
         self._lock = self._book.lock
-        self._starting: ActiveGoal | None = None
         self._pending: tuple[object, GoalOutcome] | None = None  # (message, its outcome)
         self._server = ActionServer(
             node, FollowJointTrajectory, '~/follow_joint_trajectory', _never_executed,
@@ -138,7 +124,7 @@ class FollowJointTrajectoryServer:
                                    feedback=FollowJointTrajectory.Feedback)
         self._timer = node.create_timer(MONITOR_PERIOD, self._watch)
         self._timer.cancel()
-        handler.add_listener(self)
+        handler.add_listener(self._book)
 
     @property
     def action_server(self) -> ActionServer:
@@ -162,7 +148,7 @@ class FollowJointTrajectoryServer:
         try:
             active = read_goal_message(message, request, self._config().joints,
                                        self._tolerances.defaults[1], self._now_ns())
-            self._starting = active
+            self._book.starting = active
             motion = self._handler.submit(request, self._planner(active))
             if motion is None:  # refused (answered on ~/status already): say why here too
                 refusal = active.goal.refusal or GoalError(
@@ -177,7 +163,7 @@ class FollowJointTrajectoryServer:
             self._log.error(f'{KIND}: unexpected failure: {error!r}')
             outcome = GoalOutcome(reason=f'internal error: {error}')
         finally:
-            self._starting = None
+            self._book.starting = None
             self._pending = (message, outcome)
         return GoalResponse.ACCEPT
 
@@ -242,37 +228,6 @@ class FollowJointTrajectoryServer:
         """Run the monitor's round (executor thread); stop the timer when no goal is left."""
         if not self.monitor.watch():
             self._timer.cancel()
-
-    def accepted(self, request: Request, start_ns: int) -> None:
-        """Any request spliced in (any thread): the goal it replaces ends (the monitor)."""
-        book = self._book
-        with self._lock:
-            active, starting = book.active, self._starting
-            if request.kind in OWN_KINDS:
-                if active is not None and request is active.cancel:
-                    active.brake_start_ns = start_ns
-                return
-            if starting is not None and request is starting.request:
-                starting.start_ns = start_ns
-                book.active = starting
-            else:
-                book.active = None
-            if active is not None:
-                then = _THEN.get(request.kind, 'its motion continues from the setpoint')
-                active.replaced = (f'replaced by {_REPLACED_BY.get(request.kind, request.kind)} '
-                                   f'(request_id {request.values.get("request_id", "?")}); '
-                                   f'{then}')
-                book.replaced.append(active)
-
-    def dropped(self, request: Request, reason: str) -> None:
-        """Abort the active goal if its request was dropped before its start."""
-        book = self._book
-        with self._lock:
-            active = book.active
-            if active is not None and request is active.request:
-                active.replaced = f'dropped: {reason}'
-                book.replaced.append(active)
-                book.active = None
 
     # ------------------------------------------------------------------ cancel
 
