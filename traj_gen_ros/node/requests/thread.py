@@ -18,7 +18,8 @@ goal's end (``notify_execute``) stays a task on the executor. Everything else
 handler serialises the two threads.
 
 The wait set is rclpy's own (``rclpy_implementation.WaitSet``, what its executors use):
-rclpy has no public wait set, and this wait needs nothing but the subscriptions' handles.
+rclpy 7.1.6 (Jazzy) has no public wait set, and this wait needs nothing but the
+subscriptions' handles. This module is the one place that uses it.
 """
 
 from __future__ import annotations
