@@ -130,6 +130,24 @@ def test_waits_for_the_measured_state_then_starts_there():
             end_process(robot)
 
 
+def test_stop_while_the_measured_state_is_awaited_answers_why():
+    """``~/stop``'s response gives the reason, as ``~/status`` does (issue 28)."""
+    with session() as (probe, _):
+        probe.spin_until(lambda: probe.stop_client.service_is_ready()
+                         and probe.count_publishers('/trajectory_generator/status'),
+                         20.0, 'the node')
+        count = len(probe.statuses)
+        response = probe.stop()
+        assert not response.success
+        assert response.message == f'stop refused: {WAITING}'
+        probe.spin_until(lambda: len(probe.statuses) > count, 10.0, 'the stop answer')
+        status = probe.statuses[count]
+        assert status.level == DiagnosticStatus.ERROR
+        assert status.message == response.message
+        assert {kv.key: kv.value for kv in status.values}['request'] == 'stop'
+        assert not probe.states  # streams nothing meanwhile
+
+
 def test_arm_moved_by_hand_reseeds_the_setpoint():
     with session('-p', 'command_out_topic:=/robot/commands', '-p', 'state_tolerance:=0.05',
                  robot=['--start', ','.join(map(str, START)), '--nudge-hold', '3.0']

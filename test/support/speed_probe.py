@@ -30,8 +30,8 @@ class SpeedProbe(Probe):
                        durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self.diagnostics = []
         self.create_subscription(DiagnosticArray, '/diagnostics', self.diagnostics.append, 10)
-        self.spin_until(lambda: self.factor_pub.get_subscription_count() >= 2, 10.0,
-                        'the speed_scaling_input subscriptions')
+        self.spin_until(lambda: self.factor_pub.get_subscription_count() >= 3, 10.0,
+                        'the speed_scaling_input subscriptions')  # node/speed/input.py
 
     def factor(self, value: float) -> int:
         """Publish a factor; return how many samples the stream had published by then."""

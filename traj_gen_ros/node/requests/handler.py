@@ -266,13 +266,18 @@ class RequestHandler:
         return False
 
     def stop(self, response: Trigger.Response) -> Trigger.Response:
-        """``~/stop``: brake within ``max_acceleration`` from the next tick, then hold."""
+        """
+        ``~/stop``: brake within ``max_acceleration`` from the next tick, then hold.
+
+        The response says when it is at rest, or why it was refused (as ``~/status``
+        does: ``stop refused: <reason>``, e.g. while the measured state is awaited).
+        """
         with self._lock:
             request = Request('stop', self._answers.values('stop', ''), 0, None)
             motion = self.execute(request, BRAKE)
         response.success = motion is not None
-        response.message = ('stopping: at rest in '
-                            f'{motion.plan.duration:.3f} s' if motion else 'stop failed')
+        response.message = (f'stopping: at rest in {motion.plan.duration:.3f} s' if motion
+                            else f'stop refused: {request.refusal or "unknown reason"}')
         return response
 
 

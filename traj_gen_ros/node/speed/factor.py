@@ -4,13 +4,17 @@ The speed override's two inputs and the factor they ask for (ROS-free).
 The ``speed_scaling`` parameter (the operator's slider) and the last valid
 ``~/speed_scaling_input`` message (what the robot or a program asks), each in ``[0, 1]``;
 the factor asked for is their product. :mod:`traj_gen_ros.node.speed.input` is the rclpy
-glue, :mod:`traj_gen_ros.node.speed.time_map` the ramp toward it.
+glue, :mod:`traj_gen_ros.node.speed.time_map` the ramp toward it. :class:`ChangeReport`
+paces the log lines of its changes.
 """
 
 from __future__ import annotations
 
 import math
 from typing import Protocol
+
+#: Changes of the factor asked for are logged at most once per this many seconds.
+REPORT_PERIOD = 1.0
 
 
 def check_factor(value: object, name: str = 'speed_scaling') -> float:
@@ -69,3 +73,46 @@ class FactorInputs:
         if self.last_ignored:
             values.append(('last speed_scaling_input ignored', self.last_ignored))
         return values
+
+
+class ChangeReport:
+    """
+    Lines saying a changing value, at most one per ``period`` s, the last value always said.
+
+    The first change after a quiet period is said at once; later ones are held, and the
+    line held last is due ``period`` s after the line said last (:meth:`due`), unless it
+    repeats that line. Times in s on one monotonic clock.
+    """
+
+    def __init__(self, period: float = REPORT_PERIOD) -> None:
+        """Say nothing yet; then at most one line per ``period`` s."""
+        self.period = period
+        self._said = ''
+        self._said_at = -math.inf
+        #: The line held for :meth:`due`, or None.
+        self.held: str | None = None
+        self._held_changes = 0
+
+    def change(self, now: float, line: str) -> str | None:
+        """Take a change said by ``line`` at ``now``: the line to log now, or None (held)."""
+        if now - self._said_at >= self.period:
+            return self._say(now, line)
+        self.held = line
+        self._held_changes += 1
+        return None
+
+    def due(self, now: float) -> str | None:
+        """Return the held line if a period has passed since the last one, else None."""
+        if self.held is None or now - self._said_at < self.period:
+            return None
+        line, changes = self.held, self._held_changes
+        if line == self._said:  # back where it was said last: nothing new to say
+            self.held, self._held_changes = None, 0
+            return None
+        said = self._say(now, line)
+        return said if changes == 1 else f'{said} (the last of {changes} changes since)'
+
+    def _say(self, now: float, line: str) -> str:
+        self._said, self._said_at = line, now
+        self.held, self._held_changes = None, 0
+        return line

@@ -9,12 +9,15 @@ this module reads the inputs and hands their product to the stream
   parameter callback (:meth:`SpeedScalingInput.check`: a value outside [0, 1] or not
   finite is refused with the reason), applied after it (:meth:`SpeedScalingInput.apply`);
 * ``~/speed_scaling_input`` (``control_msgs/msg/SpeedScalingFactor``, as a
-  ``joint_trajectory_controller`` names it) where control_msgs is importable: two
-  subscriptions, one reliable and transient local (it takes a transient-local
-  publisher's latched value at start-up; it matches no volatile publisher) and one best
-  effort and volatile (it matches every publisher); a message that both deliver is taken
-  once (a message no newer by its source timestamp than the last taken is skipped). A
-  factor outside [0, 1] or not finite is ignored, logged and counted on ``/diagnostics``;
+  ``joint_trajectory_controller`` names it) where control_msgs is importable: three
+  subscriptions (:data:`SUBSCRIPTIONS`), so that a publisher of any reliability and
+  durability is heard, a reliable one without loss, a latched value too; a message that
+  several deliver is taken once (a message no newer by its source timestamp than the
+  last taken is skipped). A factor outside [0, 1] or not finite is ignored, logged and
+  counted on ``/diagnostics``;
+* each change of the factor asked for is logged (INFO), at most once a second
+  (:class:`~traj_gen_ros.node.speed.factor.ChangeReport`: the first of a burst at once,
+  the value at its end a second after the last line);
 * a delayed motion (a future ``header.stamp``) that a change drops is answered: its
   request gets an ERROR ``~/status`` saying why (:data:`DROPPED`), an action goal is
   aborted with it (:meth:`RequestHandler.dropped`);
@@ -22,17 +25,45 @@ this module reads the inputs and hands their product to the stream
   ramps, forwarded as ``SpeedScalingFactor`` (reliable, transient local) to a
   ``joint_trajectory_controller``'s ``speed_scaling_input`` when the commands out are
   its plans (``command_out_type`` ``trajectory_msgs/JointTrajectory``).
+
+Why three subscriptions (the DDS request/offered rules: a reliable reader matches no
+best-effort writer, a transient-local reader no volatile writer; a best-effort or a
+volatile reader matches either): the best-effort one alone hears everyone, but loses
+what a writer sends before this node has matched it, which is what ``ros2 topic pub
+--once`` does (it publishes as soon as *it* sees a subscription, then exits); the
+reliable volatile one hears every reliable publisher and gets such a sample repaired by
+the reliable protocol once matched; only a transient-local reader gets the value a
+latched publisher wrote before the node started. A publisher that one of the two
+reliable subscriptions cannot match is expected, as the other ones hear it: that
+incompatibility is logged at debug level instead of rclpy's warning; any other is
+warned about (the best-effort subscription keeps rclpy's warning: it asks the least, so
+a publisher it cannot match is heard by none).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+import time
 
+from rclpy.clock import Clock, ClockType
+from rclpy.event_handler import QoSRequestedIncompatibleQoSInfo, SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import (
+    DurabilityPolicy,
+    qos_policy_name_from_kind,
+    QoSPolicyKind,
+    QoSProfile,
+    ReliabilityPolicy,
+)
 from traj_gen_ros.node.messages.wire import factor_cdr
-from traj_gen_ros.node.speed.factor import check_factor, FactorInputs, FactorSink
+from traj_gen_ros.node.speed.factor import (
+    ChangeReport,
+    check_factor,
+    FactorInputs,
+    FactorSink,
+    REPORT_PERIOD,
+)
 
 try:
     from control_msgs.msg import SpeedScalingFactor
@@ -40,14 +71,31 @@ except ImportError:  # control_msgs not built: the parameter alone
     SpeedScalingFactor = None
 
 INPUT_TOPIC = '~/speed_scaling_input'
+#: Every reliable publisher, volatile or transient local; a sample sent before this node
+#: matched its writer is repaired (``ros2 topic pub --once``).
+RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
+#: A transient-local publisher's latched value, also one written before the node started;
+#: the output's QoS too.
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: Every publisher, best-effort ones too (their only subscription); no repair.
+BEST_EFFORT = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT,
+                         durability=DurabilityPolicy.VOLATILE)
+#: The subscriptions in the order they are created, each with the policies in which a
+#: publisher it cannot match is expected to differ (another subscription hears it), or
+#: None: rclpy's warning. The reliable volatile one comes first: the node announces its
+#: subscriptions in that order, so a publisher that publishes at its first match (as
+#: ``ros2 topic pub --once``) has matched the one that repairs a lost sample.
+SUBSCRIPTIONS = (
+    ('reliable', RELIABLE, {QoSPolicyKind.RELIABILITY}),
+    ('transient-local', LATCHED, {QoSPolicyKind.RELIABILITY, QoSPolicyKind.DURABILITY}),
+    ('best-effort', BEST_EFFORT, None),
+)
 #: Why a delayed motion is dropped (its request's ERROR status, its action goal's abort).
 DROPPED = ('the speed scaling factor changed before its delayed start (header.stamp) '
            'and moved the state it was planned from: not executed (it would jump); '
            'resend it')
-ANY = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT,
-                 durability=DurabilityPolicy.VOLATILE)
 
 
 class SpeedScalingInput:
@@ -67,11 +115,33 @@ class SpeedScalingInput:
         self.inputs = FactorInputs(node.get_parameter('speed_scaling').value)
         self.available = SpeedScalingFactor is not None
         self._last_source_ns = -1
+        self._asked = self.inputs.product  # the factor asked for, as last reported
+        self._report = ChangeReport()
+        # The report's held line, a period after it was held (steady: not sim time).
+        self._report_timer = node.create_timer(
+            REPORT_PERIOD, self._say_held, clock=Clock(clock_type=ClockType.STEADY_TIME),
+            autostart=False)
         if self.available:
-            for qos in (LATCHED, ANY):
+            for name, qos, expected in SUBSCRIPTIONS:
+                events = (SubscriptionEventCallbacks(
+                    incompatible_qos=self._incompatible(name, expected))
+                    if expected is not None else None)
                 node.create_subscription(SpeedScalingFactor, INPUT_TOPIC, self._on_message,
-                                         qos)
+                                         qos, event_callbacks=events)
         self._apply()
+
+    def _incompatible(self, name: str, expected: set[QoSPolicyKind]
+                      ) -> Callable[[QoSRequestedIncompatibleQoSInfo], None]:
+        """Say a publisher the ``name`` subscription cannot match: debug if ``expected``."""
+        def callback(info: QoSRequestedIncompatibleQoSInfo) -> None:
+            policy = qos_policy_name_from_kind(info.last_policy_kind)
+            line = (f'a publisher on {INPUT_TOPIC} differs from its {name} subscription in '
+                    f'{policy} ({info.total_count} so far)')
+            if info.last_policy_kind in expected:
+                self._node.get_logger().debug(f'{line}: heard by another one')
+            else:
+                self._node.get_logger().warning(f'{line}: not heard there')
+        return callback
 
     @staticmethod
     def output(node: Node) -> Callable[[float], None] | None:
@@ -106,7 +176,7 @@ class SpeedScalingInput:
     def _on_message(self, message: object, info: dict) -> None:
         source_ns = info.get('source_timestamp', 0)
         if 0 < source_ns <= self._last_source_ns:
-            return  # the same message through the other subscription, or an older one
+            return  # the same message through another subscription, or an older one
         self._last_source_ns = max(self._last_source_ns, source_ns)
         ignored = self.inputs.take_message(message.factor)
         if ignored is not None:
@@ -117,12 +187,34 @@ class SpeedScalingInput:
 
     def _apply(self) -> None:
         dropped = self._stream.set_factor(self.inputs.product)
+        if self.inputs.product != self._asked:
+            self._asked = self.inputs.product
+            self._log_change()
         if dropped:
             self._node.get_logger().warning(
                 f'speed scaling changed before {len(dropped)} delayed motion(s) started '
                 'from a state the change moved: dropped (they would jump); resend them')
             if self._on_dropped is not None:
                 self._on_dropped([tag for _, tag in dropped], DROPPED)
+
+    def _log_change(self) -> None:
+        """Log the factor asked for now, or hold the line for :meth:`_say_held`."""
+        inputs = self.inputs
+        line = self._report.change(
+            time.monotonic(), f'speed scaling factor {inputs.product:g} (speed_scaling '
+            f'{inputs.parameter:g} × {INPUT_TOPIC} {inputs.topic:g})')
+        if line is not None:
+            self._node.get_logger().info(line)
+        elif self._report_timer.is_canceled():
+            self._report_timer.reset()  # fires a period from now: after the line due
+
+    def _say_held(self) -> None:
+        """Log the held line once due; stop the timer when none is held."""
+        line = self._report.due(time.monotonic())
+        if line is not None:
+            self._node.get_logger().info(line)
+        if self._report.held is None:
+            self._report_timer.cancel()
 
     def values(self) -> list[tuple[str, str]]:
         """Give the ``/diagnostics`` key/values: both inputs, the factor in force."""
