@@ -22,7 +22,8 @@ sys.exit(pytest.main(['--collect-only', '-q', '-rs', '-p', 'no:cacheprovider', '
 #: The test modules that need control_msgs (the action, the speed-override topic).
 NEEDING = {'test_node_follow_joint_trajectory.py', 'test_node_action_on_robot.py',
            'test_node_action_log.py', 'test_node_continuous_joints.py',
-           'test_node_speed_scaling.py', 'test_node_speed_scaling_scurve.py'}
+           'test_node_speed_scaling.py', 'test_node_speed_scaling_scurve.py',
+           'test_node_speed_scaling_input.py'}
 
 
 def test_without_control_msgs_the_suite_collects_and_its_tests_skip_saying_why():
