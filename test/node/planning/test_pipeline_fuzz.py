@@ -1,8 +1,10 @@
-"""Reliability (issue 5): generated malformed and valid requests through the planning layer.
+"""
+Reliability (issue 5): generated malformed and valid requests through the planning layer.
 
 parse -> validate -> plan, the node's own code path without ROS (FUZZ_CASES cases, default
 2,000; make fuzz runs more), from a moving schedule; figures in out/reliability_fuzz.json
-(the live node's layer: test/dds/test_reliability_fuzz.py)."""
+(the live node's layer: test/dds/test_reliability_fuzz.py).
+"""
 
 from collections import Counter
 import json

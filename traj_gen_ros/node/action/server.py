@@ -62,6 +62,7 @@ except ImportError as _error:  # no control_msgs: the node runs without the acti
     FollowJointTrajectory = None
     UNAVAILABLE = str(_error)
 
+
 @dataclass(frozen=True)
 class GoalOutcome:
     """What the goal callback made of a goal: running (``active``, ``motion``) or refused."""
