@@ -12,13 +12,11 @@ import math
 
 from action_msgs.msg import GoalStatus
 from diagnostic_msgs.msg import DiagnosticStatus
-from node_harness import action_types, generator_session, JOINTS, via_message
+from node_harness import action_session, action_types, JOINTS, via_message
 import pytest
-from rclpy.action import ActionClient
 
 FollowJointTrajectory, _ = action_types()
 
-ACTION = '/trajectory_generator/follow_joint_trajectory'
 START = 10.0
 TARGET = -0.1
 NEAREST = TARGET + 2 * 2 * math.pi  # 12.466 rad
@@ -44,13 +42,8 @@ def session(tmp_path_factory):
     parameters.write_text('/**:\n  ros__parameters:\n'
                           f'    robot_description: "{xml}"\n'
                           f'    initial_positions: [{START}, 0.0, 0.0, 0.0, 0.0, 0.0]\n')
-    with generator_session('--params-file', str(parameters)) as probe:
-        client = ActionClient(probe, FollowJointTrajectory, ACTION)
-        try:
-            probe.spin_until(lambda: client.server_is_ready(), 20.0, 'the action server')
-            yield probe, client
-        finally:
-            client.destroy()
+    with action_session('--params-file', str(parameters)) as session:
+        yield session
 
 
 @pytest.fixture

@@ -11,9 +11,9 @@ import time
 
 from action_msgs.msg import GoalStatus
 from node_harness import (
+    action_session,
     action_types,
     end_process,
-    generator_session,
     JOINTS,
     MAX_ACCELERATION,
     MAX_VELOCITY,
@@ -24,7 +24,6 @@ from node_harness import (
 )
 import numpy as np
 import pytest
-from rclpy.action import ActionClient
 from traj_gen_ros import cubic_via, quintic_via
 from trajectory_msgs.msg import MultiDOFJointTrajectoryPoint
 
@@ -37,13 +36,8 @@ Result = FollowJointTrajectory.Result
 
 @pytest.fixture(scope='module')
 def session():
-    with generator_session() as probe:
-        client = ActionClient(probe, FollowJointTrajectory, ACTION)
-        try:
-            probe.spin_until(lambda: client.server_is_ready(), 20.0, 'the action server')
-            yield probe, client
-        finally:
-            client.destroy()
+    with action_session() as session:
+        yield session
 
 
 @pytest.fixture

@@ -24,6 +24,7 @@ import pytest
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.srv import SetParameters
 import rclpy
+from rclpy.action import ActionClient
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -367,6 +368,20 @@ def generator_session(*ros_args: str, generator: str = '/trajectory_generator',
             yield probe
         finally:
             probe.destroy_node()
+
+
+@contextlib.contextmanager
+def action_session(*ros_args: str):
+    """Run a generator and a ready Probe with a ready FollowJointTrajectory client."""
+    follow_joint_trajectory, _ = action_types()
+    with generator_session(*ros_args) as probe:
+        client = ActionClient(probe, follow_joint_trajectory,
+                              '/trajectory_generator/follow_joint_trajectory')
+        try:
+            probe.spin_until(lambda: client.server_is_ready(), 20.0, 'the action server')
+            yield probe, client
+        finally:
+            client.destroy()
 
 
 @contextlib.contextmanager
