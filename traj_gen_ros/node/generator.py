@@ -134,7 +134,10 @@ class TrajectoryGenerator(Node):
                               publish_command=(commands if command_message is Float64MultiArray
                                                else None),
                               time_map=self._time_map,
-                              publish_factor=SpeedScalingInput.output(self))
+                              publish_factor=SpeedScalingInput.output(self),
+                              on_late=self._rate_meter.late,
+                              # A JTC runs the plans sent to it on its own clock.
+                              hold_back=command_message is Float64MultiArray or not commands)
         self.context.on_shutdown(self._stream.stopping.set)  # SIGINT/SIGTERM: stream ends
         self._answers = CountingAnswers(self, lambda: self._config.joints)
         self._requests = RequestHandler(

@@ -5,13 +5,18 @@ Deadlines are absolute (``t0 + k · period``, the period read before each tick: 
 may change), so a late wake-up does not shift the ticks after it; a tick a period or more
 late (a stalled machine, a simulated clock that jumps) restarts the grid from now and no
 tick is caught up. The thread asks for a real-time priority first
-(:func:`traj_gen_ros.node.stream.realtime.raise_priority`). Times are integer nanoseconds.
+(:func:`traj_gen_ros.node.stream.realtime.raise_priority`). It also notes each time it
+runs (each wake-up, each tick) on the monotonic clock, so :meth:`Ticker.idle_ns` tells how
+long it went without running: a late tick of a stalled thread
+(:mod:`traj_gen_ros.node.stream.clock`), not of a simulated clock that moves in big steps.
+Times are integer nanoseconds.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 import threading
+import time
 
 from traj_gen_ros.node.stream.realtime import raise_priority
 
@@ -37,6 +42,30 @@ class Ticker:
         self.priority = 'not started'
         self._started = threading.Event()
         self._thread = threading.Thread(target=self._run, name='stream', daemon=True)
+        #: The monotonic clock (ns) the thread's activity is noted on.
+        self.monotonic_ns: Callable[[], int] = time.monotonic_ns
+        self._active_ns = self.monotonic_ns()  # when the thread last ran
+        self._idle_ns = 0  # the longest it went without running since the last idle_ns()
+
+    def idle_ns(self, peek: bool = False) -> int:
+        """
+        Return the longest the thread went without running since the last call (ns).
+
+        Counted up to now, on the monotonic clock, between the times it ran (woke up,
+        ticked). Called by the tick at its sample, which starts the next count; with
+        ``peek`` (another thread asking) nothing is reset.
+        """
+        now_ns = self.monotonic_ns()
+        idle_ns = max(self._idle_ns, now_ns - self._active_ns)
+        if not peek:
+            self._active_ns, self._idle_ns = now_ns, 0
+        return idle_ns
+
+    def _alive(self) -> None:
+        """Note that the thread runs now (on the stream thread only)."""
+        now_ns = self.monotonic_ns()
+        self._idle_ns = max(self._idle_ns, now_ns - self._active_ns)
+        self._active_ns = now_ns
 
     def start(self) -> str:
         """Start the thread; return the priority it got (:func:`raise_priority`)."""
@@ -58,6 +87,7 @@ class Ticker:
         faster or slower than the wall clock is followed too.
         """
         while True:
+            self._alive()
             remaining_ns = deadline_ns - self._now_ns()
             if remaining_ns <= 0:
                 return not self.stopping.is_set()
