@@ -1,10 +1,11 @@
 """
 Late ticks without DDS: the stream holds its schedule back instead of jumping.
 
-The stream on a fake node clock and a fake monotonic clock (the stream thread's own
-activity, :meth:`Ticker.idle_ns`): a tick published long after the one before it, while
-the thread did not run, continues the motion from the last setpoint as if
-``LATE_PERIODS`` periods had passed; the rest of the motion ends that much later.
+The stream on a fake node clock and a fake monotonic clock (when the stream thread was
+last on time, :meth:`Ticker.behind_ns`): a tick published long after the one before it
+continues the motion from the last setpoint as if ``LATE_PERIODS`` periods had passed;
+the rest of the motion ends that much later. On a simulated clock only if the thread was
+kept from its schedule meanwhile: ``/clock`` may move in big steps.
 """
 
 import numpy as np
@@ -27,26 +28,31 @@ DURATION = 1.0  # s
 class Rig:
     """A stream on fake clocks, ticked by hand as its thread would tick it."""
 
-    def __init__(self, **options):
+    def __init__(self, simulated=False, **options):
         self.node = [10 ** 12]
         self.mono = [5 * 10 ** 9]
         self.published, self.late = [], []
         self.stream = Stream(held(START), ['a', 'b'], lambda: self.node[0], lambda: PERIOD,
                              self.published.append, print,
                              on_late=lambda gap, held_ns: self.late.append((gap, held_ns)),
-                             **options)
+                             simulated=lambda: simulated, **options)
         self.stream._ticker.monotonic_ns = lambda: self.mono[0]
-        self.stream._ticker.idle_ns()  # its activity on the fake monotonic clock from now
+        self.stream._ticker.behind_ns()  # on time on the fake monotonic clock from now
 
     def wait(self, ns, stalled=False):
-        """Let ``ns`` pass on both clocks; awake (a wake-up each period) unless ``stalled``."""
+        """
+        Let ``ns`` pass on both clocks up to the next deadline.
+
+        The thread waits on time (a wake-up each period, the deadline still ahead) unless
+        ``stalled``: then it is kept from running all along.
+        """
         step = ns if stalled else PERIOD
         while ns > 0:
+            if not stalled:
+                self.stream._ticker._on_time()
             self.node[0] += min(step, ns)
             self.mono[0] += min(step, ns)
             ns -= step
-            if not stalled:
-                self.stream._ticker._alive()
 
     def tick(self, after=PERIOD, stalled=False):
         """Publish the next setpoint ``after`` ns after the last; return (stamp ns, q, v)."""
@@ -66,16 +72,24 @@ class Rig:
 
 
 def test_the_clock_is_held_back_by_the_gap_beyond_the_allowance():
-    clock = StreamClock()
-    assert clock.sample(1000, 0, 100, 1000) == 1000 - (1000 - LATE_PERIODS * 100)
+    behind, simulated = [0], [False]
+    clock = StreamClock(lambda peek: behind[0], lambda: simulated[0])
+    assert clock.sample(1000, 0, 100) == 1000 - (1000 - LATE_PERIODS * 100)
     assert (clock.held_ns, clock.late_ticks) == (800, 1)
     assert clock.at(2000) == 1200 and clock.node(1200) == 2000
-    assert clock.sample(1300, 1000, 100, 300) == 400  # 3 periods, the thread idle: late
+    assert clock.overdue(1300, 1000, 100) and not clock.overdue(1200, 1000, 100)
+    assert clock.sample(1300, 1000, 100) == 400  # 3 periods: late
     assert (clock.held_ns, clock.late_ticks) == (900, 2)
-    assert clock.sample(1500, 1300, 100, 200) == 600  # 2 periods: on time
-    assert clock.sample(1800, 1500, 100, 100) == 900  # the thread was awake: followed
-    assert clock.sample(5000, -(2 ** 62), 100, 10 ** 9) == 4100  # the first setpoint
-    assert clock.late_ticks == 2
+    assert clock.sample(1500, 1300, 100) == 600  # 2 periods: on time
+    simulated[0] = True
+    behind[0] = 100
+    assert clock.sample(1800, 1500, 100) == 900  # the thread was on time: followed
+    behind[0] = 300
+    assert clock.sample(2100, 1800, 100) == 1100  # the thread was kept from it: late
+    assert clock.sample(5000, -(2 ** 62), 100) == 4000  # the first setpoint: never late
+    assert clock.late_ticks == 3
+    never = StreamClock(hold_back=False)
+    assert never.sample(10 ** 9, 0, 100) == 10 ** 9 and not never.overdue(10 ** 9, 0, 100)
 
 
 def test_after_a_stall_the_motion_continues_from_the_last_setpoint_and_ends_later():
@@ -111,9 +125,25 @@ def test_after_a_stall_the_motion_continues_from_the_last_setpoint_and_ends_late
     assert rig.stream.last_sent() == (stamps[-1], False)  # an action goal ends there
 
 
-def test_a_simulated_clock_that_moves_in_big_steps_is_followed():
-    """The thread was awake all along (use_sim_time, /clock at a few Hz): no hold-back."""
-    rig = Rig()
+def test_on_a_simulated_clock_a_tick_kept_waiting_after_its_deadline_is_late_too():
+    """Woken on time, then kept from the sample (the lock, the GIL, the CPU): late too."""
+    rig = Rig(simulated=True)
+    rig.tick()
+    plan = tg.quintic(START, GOAL, DURATION)
+    start = rig.start_motion(plan)
+    stamp = rig.tick()[0]
+    rig.wait(PERIOD)  # on time up to the deadline
+    rig.wait(2 * PERIOD, stalled=True)  # then kept 2 periods from the sample
+    after, q, _ = rig.tick(after=0, stalled=True)
+    assert after - stamp == 3 * PERIOD
+    expected = state_at(plan, (stamp - start + LATE_PERIODS * PERIOD) * 1e-9)[0]
+    assert np.allclose(q, expected, atol=1e-12)
+    assert rig.late == [(3 * PERIOD, PERIOD)]
+
+
+def test_a_simulated_clock_that_moves_in_big_steps_is_followed_a_stalled_node_is_not():
+    """use_sim_time, /clock at a few Hz: the thread waited on time all along."""
+    rig = Rig(simulated=True)
     rig.tick()
     plan = tg.quintic(START, GOAL, DURATION)
     start = rig.start_motion(plan)
@@ -121,6 +151,26 @@ def test_a_simulated_clock_that_moves_in_big_steps_is_followed():
     stamp, q, _ = rig.tick(after=STALL)
     assert np.allclose(q, state_at(plan, (stamp - start) * 1e-9)[0], atol=1e-12)
     assert rig.late == []
+    after, q, _ = rig.tick(after=STALL, stalled=True)
+    expected = state_at(plan, (stamp - start + LATE_PERIODS * PERIOD) * 1e-9)[0]
+    assert np.allclose(q, expected, atol=1e-12)
+    assert rig.late == [(STALL, STALL - LATE_PERIODS * PERIOD)]
+
+
+def test_on_the_system_clock_every_gap_beyond_the_allowance_is_held_back():
+    """Late by a few periods, the thread waiting on time meanwhile or not."""
+    rig = Rig()
+    rig.tick()
+    plan = tg.quintic(START, GOAL, DURATION)
+    start = rig.start_motion(plan)
+    stamp = rig.tick()[0]
+    after, q, _ = rig.tick(after=3 * PERIOD)
+    expected = state_at(plan, (stamp - start + LATE_PERIODS * PERIOD) * 1e-9)[0]
+    assert np.allclose(q, expected, atol=1e-12)
+    assert rig.late == [(3 * PERIOD, PERIOD)]
+    stamp, q, _ = rig.tick(after=LATE_PERIODS * PERIOD)  # the allowance itself: not late
+    assert np.allclose(q, state_at(plan, (stamp - start - PERIOD) * 1e-9)[0], atol=1e-12)
+    assert len(rig.late) == 1
 
 
 def test_without_hold_back_a_late_tick_samples_the_node_time():

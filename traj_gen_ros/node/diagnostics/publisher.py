@@ -9,7 +9,8 @@ motion in progress, the limits in force and where they came from, the counts of
 accepted, refused and superseded requests, and the joints of the setpoint outside their
 position range (:func:`~traj_gen_ros.node.planning.position_checks.outside_ranges`: WARN, and a
 warning in the log when that changes, at start-up at once), and the late ticks (a warning
-in the log for those since the last message: the stream thread does not log).
+in the log, at once and then at most every :data:`LATE_LOG_PERIOD` s for those since:
+the stream thread itself does not log).
 
 The timer runs on the executor thread and only reads counters and formats a few strings
 (the limits' text is formatted once per change of the limits), so it cannot disturb the
@@ -21,6 +22,8 @@ that also counts each answer and notes each accepted motion.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+import math
+import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.node import Node
@@ -38,6 +41,8 @@ from traj_gen_ros.node.stream.clock import LATE_PERIODS
 #: Seconds between two ``/diagnostics`` messages (diagnostic_updater's default).
 PERIOD = 1.0
 TOPIC = '/diagnostics'
+#: Late ticks are logged at most this often (s): on a busy machine they can come every second.
+LATE_LOG_PERIOD = 10.0
 
 
 class CountingAnswers(Answers):
@@ -88,6 +93,7 @@ class NodeDiagnostics:
         self._meter = meter
         self._name = f'{node.get_name()}: Trajectory generator'
         self._limits_text: tuple[object, str] = (None, 'none')
+        self._late_logged = -math.inf  # when late ticks were last logged (monotonic s)
         self._publisher = node.create_publisher(
             DiagnosticArray, TOPIC, QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
         self._timer = node.create_timer(PERIOD, self.publish)
@@ -125,9 +131,13 @@ class NodeDiagnostics:
                                           throttle_duration_sec=60.0)
 
     def _log_late(self) -> None:
-        """Warn of the late ticks since the last message, if any (at most once a period)."""
+        """Warn of the late ticks since the last warning, if any (:data:`LATE_LOG_PERIOD`)."""
+        now = time.monotonic()
+        if now - self._late_logged < LATE_LOG_PERIOD:
+            return
         ticks, gap_ns, held_ns = self._meter.late_report()
         if ticks:
+            self._late_logged = now
             self._node.get_logger().warning(
                 f'stream: {ticks} late tick{"s" if ticks > 1 else ""} (the longest '
                 f'{gap_ns * 1e-6:.1f} ms after the setpoint before it, more than '

@@ -68,7 +68,8 @@ class Stream:
                  time_map: TimeMap | None = None,
                  publish_factor: Callable[[float], None] | None = None,
                  on_late: Callable[[int, int], None] | None = None,
-                 hold_back: bool = True) -> None:
+                 hold_back: bool = True,
+                 simulated: Callable[[], bool] | None = None) -> None:
         """
         Prepare to stream ``first`` (a hold); :meth:`start` starts the thread.
 
@@ -84,16 +85,16 @@ class Stream:
         :param time_map: the speed scaling ramp and plan clock (None: a factor of 1).
         :param publish_factor: forwards the effective factor when it changes (from the
             stream thread; ``speed_scaling_output_topic``), or None.
-        :param on_late: told each late tick, from the stream thread after it published:
-            the gap since the setpoint before (ns, node clock) and how much of it the
-            schedule was held back (ns); or None.
+        :param on_late: told each late tick (the stream thread, after it published): the
+            gap since the setpoint before and how much of it was held back (ns), or None.
         :param hold_back: hold the schedule back at late ticks (:mod:`.clock`); False:
             sample it at the node time whatever the gap.
+        :param simulated: whether the node clock is a simulated one (``/clock``) now;
+            None: never.
         """
         self._time_map = time_map if time_map is not None else TimeMap(np.ones(1))
         self._schedule = Schedule(first, self._time_map)
-        self._clock = StreamClock()
-        self._hold_back, self._on_late = hold_back, on_late
+        self._on_late = on_late
         self._publish_factor = publish_factor
         self._forwarded = -1.0  # the factor last forwarded
         # Per thread: the ramp's version and the hold-back that start_state saw.
@@ -117,6 +118,8 @@ class Stream:
         self._waiting = waiting
         self._ticker = Ticker(now_ns, period_ns, self._next_deadline, self._publish_tick,
                               on_error)
+        self._clock = StreamClock(self._ticker.behind_ns, simulated or (lambda: False),
+                                  hold_back)
         self.stopping = self._ticker.stopping
 
     def start(self) -> str:
@@ -146,16 +149,14 @@ class Stream:
         Return the first tick (ns) not yet published and at least ``margin_ns`` from now.
 
         A new motion spliced at that time is published by the stream at that tick. While
-        the stream is overdue (its next setpoint will be a late tick: the thread has not
-        run for more than the allowance), the last setpoint published instead: a motion
-        spliced there is out at the late tick, without the hold-back's delay.
+        the next setpoint is overdue (a late tick, :mod:`.clock`), the last one published:
+        a motion spliced there is out at the late tick.
         """
         period_ns = self._period_ns()
         with self._lock:
             tick, last = self._next_tick_ns, self._last_published_ns
         now_ns = self._now_ns()
-        if self._hold_back and self._clock.overdue(now_ns, last, period_ns,
-                                                   self._ticker.idle_ns(peek=True)):
+        if self._clock.overdue(now_ns, last, period_ns):
             return last
         earliest = max(last + 1, now_ns + margin_ns)
         if tick < earliest:
@@ -317,9 +318,7 @@ class Stream:
             if now_ns <= self._last_published_ns or self._waiting:
                 return  # the clock has not moved on (simulated time), or nothing to stream
             last_ns, held_ns = self._last_published_ns, self._clock.held_ns
-            idle_ns = self._ticker.idle_ns()
-            at = (self._clock.sample(now_ns, last_ns, self._period_ns(), idle_ns)
-                  if self._hold_back else self._clock.at(now_ns))
+            at = self._clock.sample(now_ns, last_ns, self._period_ns())
             late_ns = self._clock.held_ns - held_ns
             state = self._schedule.setpoint(at)
             moving = self._schedule.moving_at(at)
