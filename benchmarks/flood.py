@@ -24,7 +24,7 @@ import sys
 import time
 
 REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / 'test'))
+sys.path.insert(0, str(REPO / 'test' / 'support'))
 
 from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
 from node_harness import (  # noqa: E402
