@@ -89,6 +89,7 @@ from traj_gen_ros.node.stream.realtime import (
     realtime_calling_thread,
 )
 from traj_gen_ros.node.stream.stream import Stream
+from traj_gen_ros.node.stream.transport import choose_transport
 from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
@@ -318,6 +319,7 @@ def main(args: list[str] | None = None) -> int:
     except ValueError as error:
         print(f'{NODE_NAME}: {error}', file=sys.stderr)
         return 1
+    transport = choose_transport(os.environ)  # before rclpy creates the DDS participant
     favour_calling_thread()  # before rclpy starts its threads: they inherit it
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     stop = threading.Event()
@@ -329,6 +331,7 @@ def main(args: list[str] | None = None) -> int:
     gc.collect()  # before the stream runs: a full collection holds the GIL for ~30 ms
     try:
         node = TrajectoryGenerator()
+        node.get_logger().info(transport)
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         # What exists now lives as long as the node: out of the collector's sight, later
