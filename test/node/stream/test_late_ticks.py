@@ -88,6 +88,11 @@ def test_the_clock_is_held_back_by_the_gap_beyond_the_allowance():
     assert clock.sample(2100, 1800, 100) == 1100  # the thread was kept from it: late
     assert clock.sample(5000, -(2 ** 62), 100) == 4000  # the first setpoint: never late
     assert clock.late_ticks == 3
+    # rate_hz 10 times higher from the next tick: the gap was still the old period's.
+    clock = StreamClock()
+    clock.sample(1000, 900, 100)
+    assert clock.sample(1100, 1000, 10) == 1100 and clock.late_ticks == 0
+    assert clock.sample(1121, 1100, 10) == 1120 and clock.late_ticks == 1
     never = StreamClock(hold_back=False)
     assert never.sample(10 ** 9, 0, 100) == 10 ** 9 and not never.overdue(10 ** 9, 0, 100)
 

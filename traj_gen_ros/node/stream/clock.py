@@ -50,6 +50,7 @@ class StreamClock:
             them on its own clock: holding the stream back would put it behind them).
         """
         self._behind_ns, self._simulated, self._hold_back = behind_ns, simulated, hold_back
+        self._period_ns = 0  # the period when the last setpoint was sampled
         #: How far the stream clock is behind the node clock (ns), the late ticks' sum.
         self.held_ns = 0
         #: How many ticks were late (held back).
@@ -74,7 +75,8 @@ class StreamClock:
         return LATE_PERIODS * period_ns
 
     def _late(self, now_ns: int, last_ns: int, period_ns: int, behind_ns: int) -> bool:
-        allowance = self.allowance(period_ns)
+        # A rate_hz change: the gap is the old period's (the tick was due on its grid).
+        allowance = self.allowance(max(period_ns, self._period_ns))
         return (self._hold_back and last_ns > -(2 ** 61) and now_ns - last_ns > allowance
                 and (not self._simulated() or behind_ns > allowance))
 
@@ -96,6 +98,7 @@ class StreamClock:
         time plus :meth:`allowance`, and :attr:`held_ns` grows by the rest of the gap.
         """
         if self._late(now_ns, last_ns, period_ns, self._behind_ns(False)):
-            self.held_ns += now_ns - last_ns - self.allowance(period_ns)
+            self.held_ns += now_ns - last_ns - self.allowance(max(period_ns, self._period_ns))
             self.late_ticks += 1
+        self._period_ns = period_ns
         return now_ns - self.held_ns
