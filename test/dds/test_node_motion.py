@@ -100,7 +100,7 @@ def test_goal_moves_named_joints_reaches_and_holds(probe, rest):
 
     final = probe.wait_at_rest(timeout=plan.duration + 5)
     assert np.allclose(final, expected, atol=1e-12)
-    stream_t, stream_q, _ = probe.states_between(start_ns)
+    stream_t, stream_q, _ = probe.states_between(start_ns, rate_hz=RATE)
     moving = stream_t <= plan.duration
     assert moving.sum() >= int(plan.duration * RATE * 0.8)
     assert np.allclose(stream_q[moving], plan.sample(stream_t[moving])[0], atol=1e-9)
@@ -126,7 +126,7 @@ def test_via_points_pass_through_at_their_times(probe, rest, profile):
     assert np.allclose(velocities[-1], 0, atol=1e-9)
     start_ns = stamp_ns(trajectory.header.stamp)
     probe.wait_at_rest(timeout=5)
-    stream_t, stream_q, _ = probe.states_between(start_ns)
+    stream_t, stream_q, _ = probe.states_between(start_ns, rate_hz=RATE)
     for target, t in zip(targets, times, strict=True):  # the stream, within one period
         index = int(np.argmin(np.abs(stream_t - t)))
         assert abs(stream_t[index] - t) <= 1.0 / RATE

@@ -67,7 +67,7 @@ def acceleration_steps(centres: np.ndarray, accelerations: np.ndarray) -> np.nda
 
 def assert_jerk_limited(probe, start_ns: int):
     """Check the stream from ``start_ns``: within velocity/acceleration limits, jerk bounded."""
-    times, positions, velocities = probe.states_between(start_ns)
+    times, positions, velocities = probe.states_between(start_ns, rate_hz=RATE)
     assert len(times) > 10
     assert np.all(np.diff(times) > 0)
     assert np.isfinite(positions).all() and np.isfinite(velocities).all()
@@ -102,7 +102,7 @@ def test_scurve_goal_streams_the_min_time_plan_within_every_limit(probe, rest):
     assert np.allclose(final, target, atol=1e-12)
     before_t, before_q, before_v = probe.states_between(start_ns - int(0.2e9), start_ns - 1)
     assert len(before_t) and np.all(before_q == rest) and not np.any(before_v)
-    stream_t, stream_q, stream_v = probe.states_between(start_ns)
+    stream_t, stream_q, stream_v = probe.states_between(start_ns, rate_hz=RATE)
     moving = stream_t < plan.duration
     assert moving.sum() >= 10
     stream_exp_q, stream_exp_v, _ = plan.sample(stream_t[moving])
