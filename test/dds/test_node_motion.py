@@ -185,7 +185,7 @@ def test_preemption_mid_motion_is_continuous(probe, rest, profile):
     _, q2, v2, a2 = trajectory_arrays(second)
     # The new plan starts exactly at the old plan's setpoint at the switch time.
     old_t, old_q, old_v, old_a = trajectory_arrays(first)
-    offset = (second_start - first_start) * 1e-9
+    offset = (probe.stream_ns(second_start, RATE) - probe.stream_ns(first_start, RATE)) * 1e-9
     assert np.allclose(q2[0], [np.interp(offset, old_t, old_q[:, j]) for j in range(6)],
                        atol=2e-4)
     assert np.allclose(v2[0], [np.interp(offset, old_t, old_v[:, j]) for j in range(6)],

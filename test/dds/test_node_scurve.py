@@ -156,7 +156,7 @@ def test_preemption_by_a_goal_has_no_acceleration_step(probe, rest):
     status, second = probe.goal({'joint_1': rest[0] - 0.2})
     assert status.level == DiagnosticStatus.OK, status.message
     second_start = stamp_ns(second.header.stamp)
-    switch = (second_start - first_start) * 1e-9
+    switch = (probe.stream_ns(second_start, RATE) - probe.stream_ns(first_start, RATE)) * 1e-9
     assert switch < first_plan.duration  # it replaced a moving motion
     # The new plan starts at the old plan's state at the switch, acceleration included.
     old_q, old_v, old_a = (value[0] for value in first_plan.sample(switch))
@@ -194,7 +194,7 @@ def test_stop_brakes_with_bounded_jerk_and_holds(probe, rest):
     stop_plan = probe.trajectories[-1]
     stop_start = stamp_ns(stop_plan.header.stamp)
     t, q, v, a = trajectory_arrays(stop_plan)
-    offset = (stop_start - first_start) * 1e-9
+    offset = (probe.stream_ns(stop_start, RATE) - probe.stream_ns(first_start, RATE)) * 1e-9
     assert offset < first_plan.duration
     old_q, old_v, old_a = (value[0] for value in first_plan.sample(offset))
     assert np.allclose(q[0], old_q, atol=1e-9) and np.allclose(v[0], old_v, atol=1e-9)

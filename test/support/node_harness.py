@@ -7,6 +7,7 @@ claimed with a lock file, so that runs side by side on one machine (CI beside a
 developer's ``make test``) never share one.
 """
 
+import bisect
 import contextlib
 import fcntl
 import os
@@ -322,6 +323,19 @@ class Probe(Node):
             held = held_back_ns(stamps, rate_hz)
             times -= (held[index] - held[max(index[0] - 1, 0)]) * 1e-9
         return times, np.array([s.position for s in rows]), np.array([s.velocity for s in rows])
+
+    def stream_ns(self, time_ns: int, rate_hz) -> int:
+        """
+        Return node time ``time_ns`` on the node's stream clock (ns, up to a constant).
+
+        Less what late ticks held it back by the last setpoint at or before it
+        (:func:`held_back_ns`, the node at ``rate_hz``): the difference of two such times
+        is the plan time between them (a plan's start and its replacement's).
+        """
+        stamps = [stamp_ns(s.header.stamp) for s in self.states]
+        held = held_back_ns(stamps, rate_hz)
+        index = bisect.bisect_right(stamps, time_ns) - 1
+        return time_ns - (int(held[index]) if index >= 0 else 0)
 
     # -- requests
 
