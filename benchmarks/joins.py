@@ -1,12 +1,14 @@
 """
 Processes joining the ROS graph while the node streams (issue 28): the longest gap.
 
-Two generator nodes stream side by side at ``--rate`` Hz (default 500), so that every
-join meets both at the same moment and under the same load: ``defaults``, with the node's
-defaults (no DDS setting: it takes UDPv4 only, ``traj_gen_ros.node.stream.transport``),
-and the peer, ``shm``, the same node with ``FASTDDS_BUILTIN_TRANSPORTS=DEFAULT`` (Fast
-DDS's default transports, shared memory and UDPv4: the node as it was before issue 28).
-Each publishes its setpoint on ``/<name>/joint_states``.
+Two generator nodes stream at ``--rate`` Hz (default 500), one after the other (with
+``--side-by-side`` at once, so that every join meets both at the same moment and under the
+same load, but the two streams then compete for the 2 cores): ``defaults``, with the
+node's defaults (no DDS setting: it takes UDPv4 only,
+``traj_gen_ros.node.stream.transport``), and the peer, ``shm``, the same node with
+``FASTDDS_BUILTIN_TRANSPORTS=DEFAULT`` (Fast DDS's default transports, shared memory and
+UDPv4: the node as it was before issue 28). Each publishes its setpoint on
+``/<name>/joint_states``.
 
 ``--joins`` short-lived processes (default 50, ``benchmarks/joiner.py``), one after the
 other, join the graph as ``ros2 topic pub`` and ``ros2 topic echo`` do: for each node a
@@ -29,7 +31,7 @@ The nodes run without ``ROS_AUTOMATIC_DISCOVERY_RANGE`` (ROS 2's default, ``SUBN
 this process and the joiners discover with ``LOCALHOST``, as the test harness does (with
 it ``rmw_fastrtps`` gives them shared memory among themselves whatever else is set).
 
-Usage: python benchmarks/joins.py [--joins 50] [--rate 500] [--json]
+Usage: python benchmarks/joins.py [--joins 50] [--rate 500] [--side-by-side] [--json]
 """
 
 import argparse
@@ -71,20 +73,21 @@ TARGET_PERIODS = 3
 class Recorder(Node):
     """Record each node's stream raw with its DDS sequence numbers, and /diagnostics."""
 
-    def __init__(self) -> None:
+    def __init__(self, names: list[str]) -> None:
         super().__init__(f'join_recorder_{os.getpid()}')
+        self.names = names
         reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-        self.raw = {name: [] for name in NODES}
-        self.sequence = {name: [] for name in NODES}
+        self.raw = {name: [] for name in names}
+        self.sequence = {name: [] for name in names}
         self.diagnostics: list[DiagnosticArray] = []
-        for name in NODES:
+        for name in names:
             self.create_subscription(JointState, f'/{name}/joint_states',
                                      lambda data, info, n=name: self._record(n, data, info),
                                      reliable, raw=True)
         self.create_subscription(DiagnosticArray, '/diagnostics', self.diagnostics.append,
                                  QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
         self.goals = {name: self.create_publisher(JointState, f'/{name}/goal', 10)
-                      for name in NODES}
+                      for name in names}
 
     def _record(self, name: str, data: bytes, info: dict) -> None:
         self.raw[name].append(data)
@@ -97,7 +100,7 @@ class Recorder(Node):
     def alone(self) -> bool:
         """Tell whether this process is the only one on the nodes' topics (no joiner)."""
         return all(self.count_subscribers(f'/{name}/joint_states') == 1
-                   and self.count_publishers(f'/{name}/goal') == 1 for name in NODES)
+                   and self.count_publishers(f'/{name}/goal') == 1 for name in self.names)
 
     def spin_until(self, condition, timeout: float, what: str) -> None:
         """Spin until ``condition()``; raise after ``timeout`` s."""
@@ -163,18 +166,19 @@ def node_environment(extra: dict) -> dict:
     return {**env, **extra}
 
 
-def run(joins: int = 50, rate_hz: float = 500.0) -> dict:
-    """Start both nodes, let ``joins`` processes join one by one; the figures per node."""
+def run(joins: int = 50, rate_hz: float = 500.0, names: list[str] | None = None) -> dict:
+    """Start the nodes ``names`` (all), let ``joins`` processes join one by one; the figures."""
+    names = list(NODES) if names is None else names
     rclpy.init()
     nodes = {name: NodeProcess('-r', f'__node:={name}', '-r',
                                f'joint_states:=/{name}/joint_states', '-p', f'rate_hz:={rate_hz}',
-                               env=node_environment(extra))
-             for name, extra in NODES.items()}
+                               env=node_environment(NODES[name]))
+             for name in names}
     joiner_env = dict(node_env())
     joiner_env.pop('FASTDDS_BUILTIN_TRANSPORTS', None)
     windows, controls, failed, results = [], [], 0, {}
     try:
-        recorder = Recorder()
+        recorder = Recorder(names)
         recorder.spin_until(lambda: recorder.count() > rate_hz and all(
             goal.get_subscription_count() for goal in recorder.goals.values()), 30.0,
             'both streams')
@@ -183,7 +187,7 @@ def run(joins: int = 50, rate_hz: float = 500.0) -> dict:
             for publisher in recorder.goals.values():
                 publisher.publish(goal)
             first = {name: len(raw) for name, raw in recorder.raw.items()}
-            process = subprocess.Popen([sys.executable, str(JOINER), *NODES], env=joiner_env)
+            process = subprocess.Popen([sys.executable, str(JOINER), *names], env=joiner_env)
             try:
                 recorder.spin_until(lambda p=process: p.poll() is not None, 60.0, 'a joiner')
             finally:
@@ -203,7 +207,7 @@ def run(joins: int = 50, rate_hz: float = 500.0) -> dict:
             recorder.spin_until(lambda n=enough: recorder.count() >= n, 60.0, 'a control')
             controls.append({name: (first[name], len(raw)) for name, raw in recorder.raw.items()})
         count = len(recorder.diagnostics)  # both nodes' reports after the last join
-        recorder.spin_until(lambda: len(recorder.diagnostics) >= count + 2 * len(NODES), 10.0,
+        recorder.spin_until(lambda: len(recorder.diagnostics) >= count + 2 * len(names), 10.0,
                             'the /diagnostics after the joins')
         transports = {name: next((line.split('DDS transport: ', 1)[1]
                                   for line in node.output().splitlines()
@@ -211,7 +215,7 @@ def run(joins: int = 50, rate_hz: float = 500.0) -> dict:
                       for name, node in nodes.items()}
         results = {name: {'transport': transports[name],
                           **figures(recorder, name, windows, controls, rate_hz)}
-                   for name in NODES}
+                   for name in names}
         recorder.destroy_node()
     finally:
         rclpy.shutdown()
@@ -228,16 +232,26 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument('--joins', type=int, default=50, help='processes joining, one by one')
     parser.add_argument('--rate', type=float, default=500.0, help='stream rate_hz')
+    parser.add_argument('--side-by-side', action='store_true',
+                        help='both nodes at once (every join meets both), not one after the other')
     parser.add_argument('--json', action='store_true', help='print JSON only')
     args = parser.parse_args()
-    result = run(args.joins, args.rate)
+    if not args.side_by_side:
+        parts = {name: run(args.joins, args.rate, [name]) for name in NODES}
+        result = {'rate_hz': args.rate, 'joins': args.joins,
+                  'joins_failed': sum(part['joins_failed'] for part in parts.values()),
+                  'nodes': {name: part['nodes'][name] for name, part in parts.items()}}
+    else:
+        result = run(args.joins, args.rate)
     if args.json:
         print(json.dumps(result, indent=2))
         return
     failed = result['joins_failed']
+    streaming = ('two nodes stream side by side' if args.side_by_side
+                 else 'each node in turn streams')
     print(f'{args.joins} processes join the graph one after the other (a ~/goal publisher '
-          f'and a joint_states subscription per node) while two nodes stream side by side '
-          f'at {args.rate:g} Hz; gaps between setpoints published one after the other'
+          f'and a joint_states subscription per node) while {streaming} at {args.rate:g} Hz; '
+          f'gaps between setpoints published one after the other'
           f'{f"; {failed} JOINERS FAILED" if failed else ""}')
     for name, f in result['nodes'].items():
         verdict = ''
