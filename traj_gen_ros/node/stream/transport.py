@@ -7,7 +7,7 @@ the node's participant opens that process's shared-memory port the first time it
 to it, and opening a port runs a health check that can wait a third of
 ``healthy_check_timeout_ms`` of the port's creator (333 ms with the default 1000) while
 the node's other sends wait behind it (eProsima/Fast-DDS#6535): the stream froze for
-333-337 ms in about one join in six at 500 Hz (``benchmarks/joins.py``). The check runs
+333-337 ms in 4 to 8 of 50 joins at 500 Hz (``benchmarks/joins.py``). The check runs
 in the process that opens a port with the creator's timeouts, so no setting of the node's
 own shared-memory transport can shorten it; only not having one does.
 
