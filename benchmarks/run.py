@@ -3,7 +3,9 @@ Core speed, measured against named peers in the same run (`make bench`).
 
 Prints microseconds per plan against ruckig, plan + sample of a via-point spline against
 scipy's CubicSpline, and sampling throughput, each with its target. Then runs the node
-latency benchmark (benchmarks/node_latency.py) when it is there.
+latency benchmark (benchmarks/node_latency.py) and the graph-join benchmark
+(benchmarks/joins.py: 50 processes joining while the node streams at 500 Hz, against the
+node without its transport choice) when they are there.
 """
 
 import os
@@ -210,6 +212,13 @@ def node_latency() -> None:
         subprocess.run([sys.executable, str(script)], check=True)
 
 
+def graph_joins() -> None:
+    script = Path(__file__).with_name('joins.py')
+    if script.exists():
+        print('== processes joining the ROS graph while the node streams (issue 28)', flush=True)
+        subprocess.run([sys.executable, str(script)], check=True)
+
+
 if __name__ == '__main__':
     planning()
     moving_state()
@@ -217,3 +226,4 @@ if __name__ == '__main__':
     via_spline()
     sampling()
     node_latency()
+    graph_joins()

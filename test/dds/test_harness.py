@@ -39,3 +39,26 @@ def test_a_killed_run_releases_its_domain():
     finally:
         child.kill()
         child.stdout.close()
+
+
+def test_the_stream_clocks_hold_back_is_rebuilt_from_the_stamps():
+    """held_back_ns (plan-clock comparisons) agrees with the node's own StreamClock."""
+    import numpy as np
+    from traj_gen_ros.node.stream.clock import StreamClock
+
+    rng = np.random.default_rng(28)
+    rates = [100.0] * 300 + [250.0] * 300  # rate_hz 100, then 250 from sample 300 on
+    periods = np.array([int(1e9 / rate) for rate in rates])
+    gaps = periods + rng.integers(-100_000, 300_000, len(rates))  # jitter (ns)
+    gaps[[40, 41, 299, 300, 450]] += [300_000_000, 15_000_000, 300_000_000, 25_000_000,
+                                      300_000_000]  # late ticks, one at the rate change
+    stamps = (10 ** 12 + np.cumsum(gaps)).tolist()
+    clock = StreamClock()
+    clock.sample(stamps[0], -(2 ** 62), int(periods[0]))
+    held = [0]
+    for index in range(1, len(stamps)):
+        clock.sample(stamps[index], stamps[index - 1], int(periods[index]))
+        held.append(clock.held_ns)
+    assert clock.late_ticks == 5
+    rate = dict(zip(stamps, rates, strict=True))
+    assert node_harness.held_back_ns(stamps, rate.__getitem__).tolist() == held

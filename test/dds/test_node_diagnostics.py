@@ -8,7 +8,7 @@ from sensor_msgs.msg import JointState
 
 NAME = 'trajectory_generator: Trajectory generator'
 KEYS = ['stream rate (Hz)', 'rate_hz', 'joints', 'profile', 'motion', 'limits',
-        'robot_description', 'accepted', 'refused', 'superseded',
+        'robot_description', 'accepted', 'refused', 'superseded', 'late ticks', 'held back (s)',
         'speed_scaling (parameter)', 'speed_scaling_input (topic)', 'speed scaling in force',
         'speed_scaling_input ignored']
 

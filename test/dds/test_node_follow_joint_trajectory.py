@@ -105,7 +105,7 @@ def test_goal_with_all_three_is_the_quintic_through_its_points(session, rest):
     assert np.allclose(positions, expected.sample(times)[0], atol=1e-9)
     final = probe.wait_at_rest()
     assert np.allclose(final, q[-1], atol=1e-12)
-    stream_t, stream_q, _ = probe.states_between(start, start + int(2e9))
+    stream_t, stream_q, _ = probe.states_between(start, start + int(2e9), rate_hz=RATE)
     assert len(stream_t) > 150
     assert np.allclose(stream_q, expected.sample(stream_t)[0], atol=1e-9)
     assert_continuous(probe, start - int(0.1e9))
@@ -382,7 +382,7 @@ def test_a_goal_slowed_by_speed_scaling_runs_twice_as_long_and_succeeds(session,
         assert seconds_of_plan(plan) == pytest.approx(1.0, abs=1e-9)  # ~/trajectory: unscaled
         final = probe.wait_at_rest(timeout=10)
         assert np.allclose(final, q[1], atol=1e-12)
-        times, positions, _ = probe.states_between(start, start + int(4e9))
+        times, positions, _ = probe.states_between(start, start + int(4e9), rate_hz=RATE)
         arrived = times[np.flatnonzero(np.abs(positions[:, 0] - q[1, 0]) <= 1e-9)[0]]
         assert arrived == pytest.approx(2.0, abs=0.05)  # the plan at f = 0.5
         assert_continuous(probe, start)

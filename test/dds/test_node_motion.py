@@ -100,7 +100,7 @@ def test_goal_moves_named_joints_reaches_and_holds(probe, rest):
 
     final = probe.wait_at_rest(timeout=plan.duration + 5)
     assert np.allclose(final, expected, atol=1e-12)
-    stream_t, stream_q, _ = probe.states_between(start_ns)
+    stream_t, stream_q, _ = probe.states_between(start_ns, rate_hz=RATE)
     moving = stream_t <= plan.duration
     assert moving.sum() >= int(plan.duration * RATE * 0.8)
     assert np.allclose(stream_q[moving], plan.sample(stream_t[moving])[0], atol=1e-9)
@@ -126,7 +126,7 @@ def test_via_points_pass_through_at_their_times(probe, rest, profile):
     assert np.allclose(velocities[-1], 0, atol=1e-9)
     start_ns = stamp_ns(trajectory.header.stamp)
     probe.wait_at_rest(timeout=5)
-    stream_t, stream_q, _ = probe.states_between(start_ns)
+    stream_t, stream_q, _ = probe.states_between(start_ns, rate_hz=RATE)
     for target, t in zip(targets, times, strict=True):  # the stream, within one period
         index = int(np.argmin(np.abs(stream_t - t)))
         assert abs(stream_t[index] - t) <= 1.0 / RATE
@@ -185,7 +185,7 @@ def test_preemption_mid_motion_is_continuous(probe, rest, profile):
     _, q2, v2, a2 = trajectory_arrays(second)
     # The new plan starts exactly at the old plan's setpoint at the switch time.
     old_t, old_q, old_v, old_a = trajectory_arrays(first)
-    offset = (second_start - first_start) * 1e-9
+    offset = (probe.stream_ns(second_start, RATE) - probe.stream_ns(first_start, RATE)) * 1e-9
     assert np.allclose(q2[0], [np.interp(offset, old_t, old_q[:, j]) for j in range(6)],
                        atol=2e-4)
     assert np.allclose(v2[0], [np.interp(offset, old_t, old_v[:, j]) for j in range(6)],

@@ -83,7 +83,7 @@ def test_every_refusal_is_specific_and_leaves_the_motion_untouched(probe):
     # The stream followed the original plan all along, to the end.
     t, q, _, _ = trajectory_arrays(moving)
     probe.wait_at_rest(timeout=10)
-    stream_t, stream_q, _ = probe.states_between(start)
+    stream_t, stream_q, _ = probe.states_between(start, rate_hz=100.0)
     assert stream_t[-1] > t[-1]  # the refusals happened while it moved
     for joint in range(6):
         assert np.allclose(stream_q[:, joint], np.interp(stream_t, t, q[:, joint]), atol=2e-4)

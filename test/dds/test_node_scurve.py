@@ -67,7 +67,7 @@ def acceleration_steps(centres: np.ndarray, accelerations: np.ndarray) -> np.nda
 
 def assert_jerk_limited(probe, start_ns: int):
     """Check the stream from ``start_ns``: within velocity/acceleration limits, jerk bounded."""
-    times, positions, velocities = probe.states_between(start_ns)
+    times, positions, velocities = probe.states_between(start_ns, rate_hz=RATE)
     assert len(times) > 10
     assert np.all(np.diff(times) > 0)
     assert np.isfinite(positions).all() and np.isfinite(velocities).all()
@@ -102,7 +102,7 @@ def test_scurve_goal_streams_the_min_time_plan_within_every_limit(probe, rest):
     assert np.allclose(final, target, atol=1e-12)
     before_t, before_q, before_v = probe.states_between(start_ns - int(0.2e9), start_ns - 1)
     assert len(before_t) and np.all(before_q == rest) and not np.any(before_v)
-    stream_t, stream_q, stream_v = probe.states_between(start_ns)
+    stream_t, stream_q, stream_v = probe.states_between(start_ns, rate_hz=RATE)
     moving = stream_t < plan.duration
     assert moving.sum() >= 10
     stream_exp_q, stream_exp_v, _ = plan.sample(stream_t[moving])
@@ -156,7 +156,7 @@ def test_preemption_by_a_goal_has_no_acceleration_step(probe, rest):
     status, second = probe.goal({'joint_1': rest[0] - 0.2})
     assert status.level == DiagnosticStatus.OK, status.message
     second_start = stamp_ns(second.header.stamp)
-    switch = (second_start - first_start) * 1e-9
+    switch = (probe.stream_ns(second_start, RATE) - probe.stream_ns(first_start, RATE)) * 1e-9
     assert switch < first_plan.duration  # it replaced a moving motion
     # The new plan starts at the old plan's state at the switch, acceleration included.
     old_q, old_v, old_a = (value[0] for value in first_plan.sample(switch))
@@ -194,7 +194,7 @@ def test_stop_brakes_with_bounded_jerk_and_holds(probe, rest):
     stop_plan = probe.trajectories[-1]
     stop_start = stamp_ns(stop_plan.header.stamp)
     t, q, v, a = trajectory_arrays(stop_plan)
-    offset = (stop_start - first_start) * 1e-9
+    offset = (probe.stream_ns(stop_start, RATE) - probe.stream_ns(first_start, RATE)) * 1e-9
     assert offset < first_plan.duration
     old_q, old_v, old_a = (value[0] for value in first_plan.sample(offset))
     assert np.allclose(q[0], old_q, atol=1e-9) and np.allclose(v[0], old_v, atol=1e-9)

@@ -5,12 +5,13 @@ Profile ``scurve`` with ``max_velocity`` 1 rad/s, ``max_acceleration`` 2 rad/s²
 ``max_jerk`` 10 rad/s³; a goal of ``joint_1`` 0 → 2 rad: 2.7 s, jerk phases of 0.2 s at
 0–0.2, 0.5–0.7, 2.0–2.2 and 2.5–2.7 s of plan time. Factors change while the plan itself
 jerks (its first phase, its braking). Every sample is stamped with the time it was
-sampled at, so divided differences of the published velocities bound the commanded
-acceleration and jerk by the mean value theorem, whatever the jitter of the stamps:
+sampled at (less what late ticks held the schedule back, rebuilt from the stamps), so
+divided differences of the published velocities bound the commanded acceleration and
+jerk by the mean value theorem, whatever the jitter of the stamps:
 ``Δv/Δt = a(ξ)`` and ``2 v[t₀, t₁, t₂] = j(ξ)`` (the acceleration is continuous).
 """
 
-from node_harness import stamp_ns
+from node_harness import held_back_ns, stamp_ns
 import numpy as np
 import pytest
 from speed_probe import GOAL, speed_session
@@ -35,9 +36,10 @@ def divided_differences(probe, first):
     Times from whole nanoseconds since the first sample (seconds since 1970 as a double
     would blur a 10 ms step by 2e-5 of it).
     """
+    stamps = np.array([stamp_ns(s.header.stamp) for s in probe.states], dtype=np.int64)
+    clock = (stamps - held_back_ns(stamps, 100.0))[first:]  # the schedule's time (late ticks)
     states = probe.states[first:]
-    stamps = np.array([stamp_ns(s.header.stamp) for s in states])
-    times = (stamps - stamps[0]) * 1e-9
+    times = (clock - clock[0]) * 1e-9
     velocities = np.array([s.velocity[0] for s in states])
     acceleration = np.diff(velocities) / np.diff(times)
     jerk = 2.0 * np.diff(acceleration) / (times[2:] - times[:-2])

@@ -7,6 +7,7 @@ claimed with a lock file, so that runs side by side on one machine (CI beside a
 developer's ``make test``) never share one.
 """
 
+import bisect
 import contextlib
 import fcntl
 import os
@@ -31,6 +32,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
+from traj_gen_ros.node.stream.clock import LATE_PERIODS
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 REPO = Path(__file__).resolve().parents[2]
@@ -169,6 +171,27 @@ def stamp_ns(stamp) -> int:
     return Time.from_msg(stamp).nanoseconds
 
 
+def held_back_ns(stamps_ns, rate_hz) -> np.ndarray:
+    """
+    Rebuild how far the node's stream clock was behind each setpoint's stamp (ns).
+
+    The node holds its schedule back at a late tick (``traj_gen_ros.node.stream.clock``):
+    a setpoint published more than ``LATE_PERIODS`` periods after the one before it is the
+    schedule only ``LATE_PERIODS`` periods later. Rebuilt exactly from consecutive stamps
+    (every setpoint received, the node on the system clock) and the node's ``rate_hz``
+    (Hz, or a function of the stamp in ns: the rate in force when it was published; the
+    larger period of two setpoints counts, as in the node). 0 at the first stamp.
+    """
+    stamps = np.asarray(stamps_ns, dtype=np.int64)
+    rate = rate_hz if callable(rate_hz) else (lambda stamp: rate_hz)
+    periods = np.array([int(1e9 / rate(int(stamp))) for stamp in stamps], dtype=np.int64)
+    if stamps.size == 0:
+        return periods
+    allowance = LATE_PERIODS * np.maximum(periods[:-1], periods[1:])
+    held = np.maximum(np.diff(stamps) - allowance, 0)
+    return np.concatenate([[0], np.cumsum(held)])
+
+
 def seconds(duration: Duration) -> float:
     """Seconds of a ``builtin_interfaces/Duration``."""
     return duration.sec + duration.nanosec * 1e-9
@@ -284,12 +307,36 @@ class Probe(Node):
         span = last.points[-1].time_from_start
         return stamp_ns(last.header.stamp) + span.sec * 1_000_000_000 + span.nanosec
 
-    def states_between(self, start_ns: int, end_ns: int | None = None):
-        """Stamps (s, relative to ``start_ns``), positions and velocities in a window."""
-        rows = [s for s in self.states if stamp_ns(s.header.stamp) >= start_ns
-                and (end_ns is None or stamp_ns(s.header.stamp) <= end_ns)]
-        times = np.array([(stamp_ns(s.header.stamp) - start_ns) * 1e-9 for s in rows])
+    def states_between(self, start_ns: int, end_ns: int | None = None, rate_hz=None):
+        """
+        Stamps (s, relative to ``start_ns``), positions and velocities in a window.
+
+        With the node's ``rate_hz`` (:func:`held_back_ns`): the times less what late ticks
+        held the node's stream clock back since ``start_ns``, for a plan that starts at
+        ``start_ns`` the plan's own time of each setpoint.
+        """
+        stamps = [stamp_ns(s.header.stamp) for s in self.states]
+        index = [i for i, stamp in enumerate(stamps)
+                 if stamp >= start_ns and (end_ns is None or stamp <= end_ns)]
+        rows = [self.states[i] for i in index]
+        times = np.array([(stamps[i] - start_ns) * 1e-9 for i in index])
+        if rate_hz is not None and index:
+            held = held_back_ns(stamps, rate_hz)
+            times -= (held[index] - held[max(index[0] - 1, 0)]) * 1e-9
         return times, np.array([s.position for s in rows]), np.array([s.velocity for s in rows])
+
+    def stream_ns(self, time_ns: int, rate_hz) -> int:
+        """
+        Return node time ``time_ns`` on the node's stream clock (ns, up to a constant).
+
+        Less what late ticks held it back by the last setpoint at or before it
+        (:func:`held_back_ns`, the node at ``rate_hz``): the difference of two such times
+        is the plan time between them (a plan's start and its replacement's).
+        """
+        stamps = [stamp_ns(s.header.stamp) for s in self.states]
+        held = held_back_ns(stamps, rate_hz)
+        index = bisect.bisect_right(stamps, time_ns) - 1
+        return time_ns - (int(held[index]) if index >= 0 else 0)
 
     # -- requests
 

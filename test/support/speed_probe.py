@@ -8,7 +8,13 @@ control_msgs/SpeedScalingFactor).
 import contextlib
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from node_harness import Probe, running_node, speed_scaling_factor_type, stamp_ns
+from node_harness import (
+    held_back_ns,
+    Probe,
+    running_node,
+    speed_scaling_factor_type,
+    stamp_ns,
+)
 import numpy as np
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
@@ -17,6 +23,8 @@ SpeedScalingFactor = speed_scaling_factor_type()  # skips the test module withou
 
 #: The goal of joint_1 (rad) from 0.
 GOAL = 2.0
+#: The rate the speed tests run the node at (Hz).
+RATE_HZ = 100.0
 
 
 class SpeedProbe(Probe):
@@ -67,9 +75,17 @@ class SpeedProbe(Probe):
         assert status.level == DiagnosticStatus.OK, status.message
         return stamp_ns(trajectory.header.stamp)
 
-    def samples(self, first=0):
-        """Stamps (s), positions and velocities of joint_1 from sample ``first`` on."""
-        times = np.array([stamp_ns(s.header.stamp) * 1e-9 for s in self.states[first:]])
+    def samples(self, first=0, rate_hz=RATE_HZ):
+        """
+        Return times (s), positions and velocities of joint_1 from sample ``first`` on.
+
+        The times are the stamps (s) less what late ticks held the node's stream clock
+        back since sample ``first`` (``held_back_ns``, the node at ``rate_hz``): the
+        schedule's time after it.
+        """
+        stamps = np.array([stamp_ns(s.header.stamp) for s in self.states], dtype=np.int64)
+        held = held_back_ns(stamps, rate_hz)
+        times = (stamps[first:] - (held[first:] - held[max(first - 1, 0)])) * 1e-9
         return (times, np.array([s.position[0] for s in self.states[first:]]),
                 np.array([s.velocity[0] for s in self.states[first:]]))
 

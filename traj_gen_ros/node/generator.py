@@ -86,6 +86,7 @@ from traj_gen_ros.node.stream.realtime import (
     realtime_calling_thread,
 )
 from traj_gen_ros.node.stream.stream import Stream
+from traj_gen_ros.node.stream.transport import choose_transport
 from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
@@ -125,7 +126,11 @@ class TrajectoryGenerator(Node):
                               waiting=measured is not None,
                               publish_command=self._commands.stream_command,
                               time_map=self._time_map,
-                              publish_factor=SpeedScalingInput.output(self))
+                              publish_factor=SpeedScalingInput.output(self),
+                              on_late=self._rate_meter.late,
+                              # A JTC runs the plans sent to it on its own clock.
+                              hold_back=command_message is Float64MultiArray or not commands,
+                              simulated=lambda: self._node_clock.ros_time_is_active)
         self.context.on_shutdown(self._stream.stopping.set)  # SIGINT/SIGTERM: stream ends
         self._answers = CountingAnswers(self, lambda: self._config.joints)
         self._requests = RequestHandler(
@@ -289,6 +294,7 @@ def main(args: list[str] | None = None) -> int:
     except ValueError as error:
         print(f'{NODE_NAME}: {error}', file=sys.stderr)
         return 1
+    transport = choose_transport(os.environ)  # before rclpy creates the DDS participant
     favour_calling_thread()  # before rclpy starts its threads: they inherit it
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     stop = threading.Event()
@@ -300,6 +306,7 @@ def main(args: list[str] | None = None) -> int:
     gc.collect()  # before the stream runs: a full collection holds the GIL for ~30 ms
     try:
         node = TrajectoryGenerator()
+        node.get_logger().info(transport)
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         # What exists now lives as long as the node: out of the collector's sight, later

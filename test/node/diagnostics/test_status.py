@@ -25,7 +25,8 @@ def test_ok_status_with_every_value():
     assert dict(values) == {
         'stream rate (Hz)': '99.5', 'rate_hz': '100', 'joints': '6', 'profile': 'quintic',
         'motion': 'holding', 'limits': 'joint_1: position unlimited, 2 rad/s (max_velocity)',
-        'robot_description': 'none', 'accepted': '3', 'refused': '2', 'superseded': '1'}
+        'robot_description': 'none', 'accepted': '3', 'refused': '2', 'superseded': '1',
+        'late ticks': '0', 'held back (s)': '0.000'}
 
 
 def test_a_slow_stream_or_a_refused_description_warns():
@@ -59,6 +60,21 @@ def test_rate_meter_counts_publications_per_window():
     for _ in range(25):
         publish(b'x')
     assert meter.rate(11.5) == 50.0 and len(published) == 75
+
+
+def test_rate_meter_counts_late_ticks_and_reports_those_since_the_last_report():
+    meter = RateMeter(10.0)
+    assert meter.late_report() == (0, 0, 0)
+    meter.late(335_000_000, 331_000_000)
+    meter.late(6_000_000, 2_000_000)
+    assert (meter.late_ticks, meter.held_back_ns) == (2, 333_000_000)
+    assert meter.late_report() == (2, 335_000_000, 333_000_000)
+    assert meter.late_report() == (0, 0, 0)
+    meter.late(5_000_000, 1_000_000)
+    assert meter.late_report() == (1, 5_000_000, 1_000_000) and meter.late_ticks == 3
+    values = dict(status(late=(meter.late_ticks, meter.held_back_ns))[2])
+    assert values['late ticks'] == '3' and values['held back (s)'] == '0.334'
+    assert status(late=(3, 334_000_000))[0] == OK  # counted and logged, not a warning
 
 
 def test_counts_by_level_and_superseded_batches():

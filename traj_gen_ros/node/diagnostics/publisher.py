@@ -8,7 +8,9 @@ by :func:`traj_gen_ros.node.diagnostics.status.node_status`: achieved stream rat
 motion in progress, the limits in force and where they came from, the counts of
 accepted, refused and superseded requests, and the joints of the setpoint outside their
 position range (:func:`~traj_gen_ros.node.planning.position_checks.outside_ranges`: WARN, and a
-warning in the log when that changes, at start-up at once).
+warning in the log when that changes, at start-up at once), and the late ticks (a warning
+in the log, at once and then at most every :data:`LATE_LOG_PERIOD` s for those since:
+the stream thread itself does not log).
 
 The timer runs on the executor thread and only reads counters and formats a few strings
 (the limits' text is formatted once per change of the limits), so it cannot disturb the
@@ -20,6 +22,8 @@ that also counts each answer and notes each accepted motion.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+import math
+import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.node import Node
@@ -33,10 +37,13 @@ from traj_gen_ros.node.planning.position_checks import outside_ranges
 from traj_gen_ros.node.requests.answers import Answers
 from traj_gen_ros.node.requests.request import Request
 from traj_gen_ros.node.settings.config import Config
+from traj_gen_ros.node.stream.clock import LATE_PERIODS
 
 #: Seconds between two ``/diagnostics`` messages (diagnostic_updater's default).
 PERIOD = 1.0
 TOPIC = '/diagnostics'
+#: Late ticks are logged at most this often (s): on a busy machine they can come every second.
+LATE_LOG_PERIOD = 10.0
 
 
 class CountingAnswers(Answers):
@@ -87,6 +94,7 @@ class NodeDiagnostics:
         self._meter = meter
         self._name = f'{node.get_name()}: Trajectory generator'
         self._limits_text: tuple[object, str] = (None, 'none')
+        self._late_logged = -math.inf  # when late ticks were last logged (monotonic s)
         self._publisher = node.create_publisher(
             DiagnosticArray, TOPIC, QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
         self._timer = node.create_timer(PERIOD, self.publish)
@@ -123,6 +131,21 @@ class NodeDiagnostics:
             self._node.get_logger().error(f'/diagnostics: {error!r}',
                                           throttle_duration_sec=60.0)
 
+    def _log_late(self) -> None:
+        """Warn of the late ticks since the last warning, if any (:data:`LATE_LOG_PERIOD`)."""
+        now = time.monotonic()
+        if now - self._late_logged < LATE_LOG_PERIOD:
+            return
+        ticks, gap_ns, held_ns = self._meter.late_report()
+        if ticks:
+            self._late_logged = now
+            self._node.get_logger().warning(
+                f'stream: {ticks} late tick{"s" if ticks > 1 else ""} (the longest '
+                f'{gap_ns * 1e-6:.1f} ms after the setpoint before it, more than '
+                f'{LATE_PERIODS} periods): the motion was held back {held_ns * 1e-6:.1f} ms, '
+                f'to continue from the last setpoint without a jump (late ticks since '
+                f'start: {self._meter.late_ticks})')
+
     def _publish(self) -> None:
         now = self._node.get_clock().now()
         config = self._config()
@@ -133,7 +156,9 @@ class NodeDiagnostics:
             limits=self._limits_summary(config), urdf_source=self._limits.source,
             urdf_problem=self._limits.problem, counts=self._answers.counts,
             outside=self.check_ranges(),
-            feedback=self._measured() if self._measured else None)
+            feedback=self._measured() if self._measured else None,
+            late=(self._meter.late_ticks, self._meter.held_back_ns))
+        self._log_late()
         status = DiagnosticStatus(level=bytes([level]), name=self._name, message=message,
                                   hardware_id='',
                                   values=[KeyValue(key=k, value=v) for k, v in values])

@@ -7,7 +7,8 @@ message and key/values:
 
 * :class:`RateMeter` counts the setpoints the stream publishes (one integer increment per
   tick, on the stream thread) and turns the count into the achieved rate over the window
-  since the last report;
+  since the last report; it also counts the late ticks, where the stream held its
+  schedule back (:mod:`traj_gen_ros.node.stream.clock`), for the log and ``/diagnostics``;
 * :class:`RequestCounts` counts the answers: accepted, refused, superseded;
 * :class:`MotionLog` knows the accepted motions and their start times, so it can say
   which one is in progress and how long it has left (or ``holding``);
@@ -41,6 +42,26 @@ class RateMeter:
         """Start the first window at ``now_s`` (s, the node clock)."""
         self.count = 0
         self._window = (now_s, 0)
+        #: Late ticks since start, and how long the schedule was held back by them (ns).
+        self.late_ticks = 0
+        self.held_back_ns = 0
+        self._late = (0, 0, 0)  # since the last late_report: ticks, longest gap, held back
+
+    def late(self, gap_ns: int, held_ns: int) -> None:
+        """
+        Count a late tick (the stream thread): ``gap_ns`` after the setpoint before it.
+
+        ``held_ns`` of that gap held the schedule back (ns, node clock).
+        """
+        self.late_ticks += 1
+        self.held_back_ns += held_ns
+        ticks, longest, held = self._late
+        self._late = (ticks + 1, max(longest, gap_ns), held + held_ns)
+
+    def late_report(self) -> tuple[int, int, int]:
+        """Return the late ticks since the last call, the longest gap and the hold-back (ns)."""
+        report, self._late = self._late, (0, 0, 0)
+        return report
 
     def wrap(self, publish: Callable[[bytes], None]) -> Callable[[bytes], None]:
         """Return ``publish`` counting each call (the stream thread's only extra work)."""
@@ -118,8 +139,8 @@ class MotionLog:
 def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str,
                 motion: str, limits: str, urdf_source: str, urdf_problem: str,
                 counts: RequestCounts, outside: str = '',
-                feedback: tuple[int, str, list[tuple[str, str]]] | None = None
-                ) -> tuple[int, str, list[tuple[str, str]]]:
+                feedback: tuple[int, str, list[tuple[str, str]]] | None = None,
+                late: tuple[int, int] = (0, 0)) -> tuple[int, str, list[tuple[str, str]]]:
     """
     Build the node's diagnostic status: ``(level, message, [(key, value), …])``.
 
@@ -131,6 +152,7 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
     :param urdf_problem: why the last robot description was refused ('' if none was).
     :param outside: the setpoint's joints outside their range (``outside_ranges``), or ''.
     :param feedback: the measured state's level, problem and values, or None (standalone).
+    :param late: the late ticks since start and how long they held the schedule back (ns).
     """
     problems = []
     feedback_level = OK
@@ -161,6 +183,8 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
         ('accepted', str(counts.accepted)),
         ('refused', str(counts.refused)),
         ('superseded', str(counts.superseded)),
+        ('late ticks', str(late[0])),
+        ('held back (s)', f'{late[1] * 1e-9:.3f}'),
     ]
     if urdf_problem:
         values.append(('robot_description refused', urdf_problem))

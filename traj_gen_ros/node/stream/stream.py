@@ -23,6 +23,11 @@ fixes the ramp up to it, and a request is planned from the running plan's own st
 planned is not spliced (the request is planned again). :meth:`Stream.plan_elapsed` tells
 how much plan time has passed (an action's feedback and goal-time check).
 
+Late ticks (:mod:`traj_gen_ros.node.stream.clock`): the schedule and the ramp run on the
+stream clock, held back at a late tick so that the setpoint after a stall continues from
+the last one. Times in and out of :class:`Stream` are node times; a plan whose start
+state a late tick moved is planned again, as for a factor change.
+
 The thread is a :class:`~traj_gen_ros.node.stream.ticker.Ticker` (a fixed grid of the node
 clock). On a busy machine it asks for a real-time priority (``SCHED_FIFO``) and, if that
 is not permitted, a lower nice value; if neither is, it runs as it is
@@ -40,7 +45,8 @@ import numpy as np
 from traj_gen_ros.node.messages.wire import joint_names_cdr, joint_state_cdr
 from traj_gen_ros.node.planning.motion import held, PlannedMotion, State
 from traj_gen_ros.node.speed.time_map import TimeMap
-from traj_gen_ros.node.stream.schedule import Schedule
+from traj_gen_ros.node.stream.clock import StreamClock
+from traj_gen_ros.node.stream.schedule import BEGINNING_NS, Schedule
 from traj_gen_ros.node.stream.ticker import Ticker
 
 #: A factor change waits for a motion spliced to start within this long (ns).
@@ -56,7 +62,10 @@ class Stream:
                  waiting: bool = False,
                  publish_command: Callable[[np.ndarray, np.ndarray], None] | None = None,
                  time_map: TimeMap | None = None,
-                 publish_factor: Callable[[float], None] | None = None) -> None:
+                 publish_factor: Callable[[float], None] | None = None,
+                 on_late: Callable[[int, int], None] | None = None,
+                 hold_back: bool = True,
+                 simulated: Callable[[], bool] | None = None) -> None:
         """
         Prepare to stream ``first`` (a hold); :meth:`start` starts the thread.
 
@@ -73,12 +82,20 @@ class Stream:
         :param time_map: the speed scaling ramp and plan clock (None: a factor of 1).
         :param publish_factor: forwards the effective factor when it changes (from the
             stream thread; ``speed_scaling_output_topic``), or None.
+        :param on_late: told each late tick (the stream thread, after it published): the
+            gap since the setpoint before and how much of it was held back (ns), or None.
+        :param hold_back: hold the schedule back at late ticks (:mod:`.clock`); False:
+            sample it at the node time whatever the gap.
+        :param simulated: whether the node clock is a simulated one (``/clock``) now;
+            None: never.
         """
         self._time_map = time_map if time_map is not None else TimeMap(np.ones(1))
         self._schedule = Schedule(first, self._time_map)
+        self._on_late = on_late
         self._publish_factor = publish_factor
         self._forwarded = -1.0  # the factor last forwarded
-        self._versions: dict[int, int] = {}  # per thread: the ramp version start_state saw
+        # Per thread: the ramp's version and the hold-back that start_state saw.
+        self._versions: dict[int, tuple[int, int]] = {}
         self._last_position = first.end.copy()  # the last setpoint published (rad)
         self._names_cdr = joint_names_cdr(list(joint_names))
         self._now_ns = now_ns
@@ -90,7 +107,7 @@ class Stream:
         # setpoint has been published.
         self._lock = threading.Lock()
         self._published = threading.Condition(self._lock)
-        self._last_published_ns = -(2 ** 62)  # when the last setpoint was sampled
+        self._last_published_ns = BEGINNING_NS  # when the last setpoint was sampled
         self._sent_ns = -(2 ** 62)  # when the last setpoint sampled is also on the wire
         self._sent_moving = False  # whether the schedule moved at that setpoint
         self._last_tick_ns = -(2 ** 62)  # the tick (deadline) it was published for
@@ -98,6 +115,8 @@ class Stream:
         self._waiting = waiting
         self._ticker = Ticker(now_ns, period_ns, self._next_deadline, self._publish_tick,
                               on_error)
+        self._clock = StreamClock(self._ticker.behind_ns, simulated or (lambda: False),
+                                  hold_back)
         self.stopping = self._ticker.stopping
 
     def start(self) -> str:
@@ -126,12 +145,17 @@ class Stream:
         """
         Return the first tick (ns) not yet published and at least ``margin_ns`` from now.
 
-        A new motion spliced at that time is published by the stream at that tick.
+        A new motion spliced at that time is published by the stream at that tick. While
+        the next setpoint is overdue (a late tick, :mod:`.clock`), the last one published:
+        a motion spliced there is out at the late tick.
         """
         period_ns = self._period_ns()
         with self._lock:
             tick, last = self._next_tick_ns, self._last_published_ns
-        earliest = max(last + 1, self._now_ns() + margin_ns)
+        now_ns = self._now_ns()
+        if self._clock.overdue(now_ns, last, period_ns):
+            return last
+        earliest = max(last + 1, now_ns + margin_ns)
         if tick < earliest:
             tick += -(-(earliest - tick) // period_ns) * period_ns
         return tick
@@ -142,21 +166,24 @@ class Stream:
 
         ``scaled`` (a goal, via points): the running plan's own state, where a scaled
         motion spliced at ``time_ns`` starts (:meth:`Schedule.scaled_start`); else (a
-        brake) the commanded setpoint. The ramp's version is noted for :meth:`splice`.
+        brake) the commanded setpoint. The ramp's version and the hold-back are noted
+        for :meth:`splice`.
         """
         with self._lock:
             schedule = self._schedule
-            self._versions[threading.get_ident()] = self._time_map.version
+            self._versions[threading.get_ident()] = (self._time_map.version,
+                                                     self._clock.held_ns)
+            at = self._clock.at(time_ns)
             if scaled:
-                state = schedule.plan_state(schedule.scaled_start(time_ns))
+                state = schedule.plan_state(schedule.scaled_start(at))
             else:
-                state = schedule.setpoint(time_ns)
-            return state, schedule.end_position(time_ns)
+                state = schedule.setpoint(at)
+            return state, schedule.end_position(at)
 
     def setpoint(self, time_ns: int) -> State:
         """Return the commanded setpoint at ``time_ns`` (not before the last published)."""
         with self._lock:
-            return self._schedule.setpoint(time_ns)
+            return self._schedule.setpoint(self._clock.at(time_ns))
 
     def set_factor(self, factor: float) -> list[tuple[PlannedMotion, object]]:
         """
@@ -169,7 +196,7 @@ class Stream:
         planned from, with the ``tag`` each was spliced with (:meth:`Schedule.set_factor`).
         """
         with self._lock:
-            from_ns = self._last_published_ns + 1
+            from_ns = self._clock.at(self._last_published_ns) + 1
             return self._schedule.set_factor(factor, from_ns, FACTOR_DEFER_NS)
 
     def set_scaling_limits(self, max_acceleration: np.ndarray,
@@ -181,7 +208,7 @@ class Stream:
     def factor_in_force(self) -> float:
         """Return the effective (ramped) factor at the last published setpoint."""
         with self._lock:
-            return self._schedule.factor_at(max(self._last_published_ns, 0))
+            return self._schedule.factor_at(max(self._clock.at(self._last_published_ns), 0))
 
     def plan_elapsed(self, start_ns: int, now_ns: int) -> float:
         """
@@ -190,20 +217,22 @@ class Stream:
         ``∫ f dt`` from ``start_ns`` to ``now_ns`` (the node clock, ns): equal to
         ``(now_ns - start_ns) · 1e-9`` at a factor of 1, less when slowed, constant while
         paused. ``now_ns`` at or after the last published setpoint; ``start_ns`` too, or
-        a time since the last change of the factor asked for.
+        a time since the last change of the factor asked for and the last late tick.
         """
         with self._lock:
-            return self._schedule.plan_elapsed(start_ns, now_ns)
+            return self._schedule.plan_elapsed(self._clock.at(start_ns),
+                                               self._clock.at(now_ns))
 
     def time_left(self, time_ns: int) -> float:
         """Return the plan time (s) left at ``time_ns`` (:meth:`Schedule.time_left`)."""
         with self._lock:
-            return self._schedule.time_left(max(time_ns, self._last_published_ns))
+            return self._schedule.time_left(
+                self._clock.at(max(time_ns, self._last_published_ns)))
 
     def moving_at(self, time_ns: int) -> bool:
         """Tell whether the schedule is in motion at ``time_ns`` (a plan not yet at its end)."""
         with self._lock:
-            return self._schedule.moving_at(time_ns)
+            return self._schedule.moving_at(self._clock.at(time_ns))
 
     def last_published(self) -> int:
         """
@@ -236,22 +265,26 @@ class Stream:
 
         That is ``start_ns`` itself if the stream has not got there yet, or the next tick
         if ``start_ns`` is the last setpoint published. ``None``, splicing nothing, if the
-        stream has published a setpoint after ``start_ns``: the motion would jump.
+        stream has published a setpoint after ``start_ns``: the motion would jump. Nor if
+        a late tick held the schedule back since :meth:`start_state`: planned again.
         """
         with self._lock:
             if self._last_published_ns > start_ns:
                 return None
             if self._versions.pop(threading.get_ident(), None) not in (
-                    None, self._time_map.version):
-                return None  # the factor changed since it was planned: plan it again
+                    None, (self._time_map.version, self._clock.held_ns)):
+                return None  # the factor or the hold-back changed since: plan it again
+            at = self._clock.at(start_ns)
             if not motion.unscaled and motion.plan.duration > 0.0:
-                start_ns = self._schedule.scaled_start(start_ns)
+                at = self._schedule.scaled_start(at)
+                start_ns = self._clock.node(at)
             first_ns = start_ns
             if self._last_published_ns == start_ns:
                 first_ns = self._next_tick_ns
                 if first_ns <= self._last_tick_ns:  # the stream is between two ticks
                     first_ns = self._last_tick_ns + self._period_ns()
-            self._schedule.splice(start_ns, motion, self._now_ns(), tag)
+            # What ran before the last setpoint published is no longer needed.
+            self._schedule.splice(at, motion, self._clock.at(self._last_published_ns), tag)
             return first_ns
 
     def wait_published(self, time_ns: int, timeout: float) -> bool:
@@ -272,21 +305,28 @@ class Stream:
             self._next_tick_ns = tick_ns
 
     def _publish_tick(self, tick_ns: int) -> None:
-        """Sample the schedule now and publish it as the setpoint of tick ``tick_ns``."""
+        """
+        Sample the schedule now and publish it as the setpoint of tick ``tick_ns``.
+
+        At the stream time of now: held back if this tick is late (:mod:`.clock`).
+        """
         with self._lock:
             now_ns = self._now_ns()
             if now_ns <= self._last_published_ns or self._waiting:
                 return  # the clock has not moved on (simulated time), or nothing to stream
-            state = self._schedule.setpoint(now_ns)
-            moving = self._schedule.moving_at(now_ns)
-            self._schedule.commit(now_ns)
-            factor = self._schedule.factor_at(now_ns) if self._publish_factor else 0.0
+            last_ns, held_ns = self._last_published_ns, self._clock.held_ns
+            at = self._clock.sample(now_ns, last_ns, self._period_ns())
+            late_ns = self._clock.held_ns - held_ns
+            state = self._schedule.setpoint(at)
+            moving = self._schedule.moving_at(at)
+            self._schedule.commit(at)
+            factor = self._schedule.factor_at(at) if self._publish_factor else 0.0
             position, velocity = state.position, state.velocity
             finite = np.count_nonzero(np.isfinite(position)) + \
                 np.count_nonzero(np.isfinite(velocity)) == 2 * position.size
             if not finite:  # never published: hold the last setpoint from now on
                 position, velocity = self._last_position, np.zeros_like(self._last_position)
-                self._schedule.splice(now_ns, held(position), now_ns)
+                self._schedule.splice(at, held(position), at)
             self._last_position = position
             self._last_published_ns = now_ns
             self._last_tick_ns = tick_ns
@@ -303,3 +343,5 @@ class Stream:
             with self._published:
                 self._sent_ns, self._sent_moving = now_ns, moving and finite
                 self._published.notify_all()
+            if late_ns and self._on_late is not None:
+                self._on_late(now_ns - last_ns, late_ns)

@@ -5,13 +5,19 @@ Deadlines are absolute (``t0 + k · period``, the period read before each tick: 
 may change), so a late wake-up does not shift the ticks after it; a tick a period or more
 late (a stalled machine, a simulated clock that jumps) restarts the grid from now and no
 tick is caught up. The thread asks for a real-time priority first
-(:func:`traj_gen_ros.node.stream.realtime.raise_priority`). Times are integer nanoseconds.
+(:func:`traj_gen_ros.node.stream.realtime.raise_priority`). It also notes on the
+monotonic clock when it was last on time (waiting for a deadline still ahead, or at a
+tick's sample), so :meth:`Ticker.behind_ns` tells how long it has been kept from its
+schedule: a late tick of a stalled thread (:mod:`traj_gen_ros.node.stream.clock`), not of
+a simulated clock that moves in big steps while the thread waits on time. Times are
+integer nanoseconds.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 import threading
+import time
 
 from traj_gen_ros.node.stream.realtime import raise_priority
 
@@ -37,6 +43,29 @@ class Ticker:
         self.priority = 'not started'
         self._started = threading.Event()
         self._thread = threading.Thread(target=self._run, name='stream', daemon=True)
+        #: The monotonic clock (ns) on which the thread notes when it was on time.
+        self.monotonic_ns: Callable[[], int] = time.monotonic_ns
+        self._on_time_ns = self.monotonic_ns()
+
+    def behind_ns(self, peek: bool = False) -> int:
+        """
+        Return how long the thread has been behind its schedule (ns, monotonic clock).
+
+        Since it last waited for a deadline still ahead, or since its last tick's sample,
+        whichever is later: short while it keeps its ticks (and while a simulated clock
+        stands still), long when it was stopped, preempted or blocked. The tick calls it
+        at its sample, which counts as on time from then; with ``peek`` (another thread
+        asking) nothing is noted.
+        """
+        now_ns = self.monotonic_ns()
+        behind_ns = now_ns - self._on_time_ns
+        if not peek:
+            self._on_time_ns = now_ns
+        return behind_ns
+
+    def _on_time(self) -> None:
+        """Note that the thread waits for a deadline still ahead (the stream thread)."""
+        self._on_time_ns = self.monotonic_ns()
 
     def start(self) -> str:
         """Start the thread; return the priority it got (:func:`raise_priority`)."""
@@ -61,6 +90,7 @@ class Ticker:
             remaining_ns = deadline_ns - self._now_ns()
             if remaining_ns <= 0:
                 return not self.stopping.is_set()
+            self._on_time()
             if self.stopping.wait(min(remaining_ns, period_ns) * 1e-9):
                 return False
 
