@@ -129,7 +129,7 @@ class TrajectoryGenerator(Node):
                               publish_factor=SpeedScalingInput.output(self),
                               on_late=self._rate_meter.late,
                               # A JTC runs the plans sent to it on its own clock.
-                              hold_back=command_message is Float64MultiArray or not commands,
+                              hold_back=not self._commands.own_clock,
                               simulated=lambda: self._node_clock.ros_time_is_active)
         self.context.on_shutdown(self._stream.stopping.set)  # SIGINT/SIGTERM: stream ends
         self._answers = CountingAnswers(self, lambda: self._config.joints)

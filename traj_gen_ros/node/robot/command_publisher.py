@@ -84,6 +84,9 @@ class CommandOutput:
         self.stream_command: Callable[[np.ndarray, np.ndarray], None] | None = None
         #: For ``RequestHandler(on_plan=)``: called with every plan spliced in.
         self.on_plan: Callable[[int, PlannedMotion], None] = _no_plan
+        #: Whether a controller runs the plans sent to it on its own clock (a JTC's
+        #: ``JointTrajectory``): then the stream's clock is never held back.
+        self.own_clock = bool(topic) and self.command_type != FLOAT64_MULTI_ARRAY
         if not topic:
             return
         array = self.command_type == FLOAT64_MULTI_ARRAY
