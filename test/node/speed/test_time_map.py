@@ -10,11 +10,8 @@ from traj_gen_ros.node.planning.motion import held, PlannedMotion
 from traj_gen_ros.node.planning.pipeline import plan_stop
 from traj_gen_ros.node.speed.factor import check_factor, FactorInputs
 from traj_gen_ros.node.speed.plan_window import jerk_at, PlanWindow
-from traj_gen_ros.node.speed.time_map import (
-    MARGIN,
-    rate_bounds,
-    TimeMap,
-)
+from traj_gen_ros.node.speed.ramp_bounds import MARGIN, rate_bounds
+from traj_gen_ros.node.speed.time_map import TimeMap
 from traj_gen_ros.node.stream.schedule import Schedule
 
 MS = 1_000_000

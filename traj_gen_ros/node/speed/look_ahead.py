@@ -33,14 +33,17 @@ No ROS here. Units: rad (or m), rad/s, rad/s², rad/s³, s.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 import math
 
 import numpy as np
 from traj_gen_ros.node.speed.plan_window import PlanWindow
+from traj_gen_ros.node.speed.ramp_bounds import jerk_bounds, rate_bounds
 
 #: Chunks the brake after a step is bounded on (its steps grouped evenly).
 CHUNKS = 24
+#: The brakes tried under a jerk limit, as fractions of the strongest (:func:`ramp_candidates`).
+CANDIDATES = 4.0 ** -np.arange(6)
 #: Relative slack of the check on the limits (rounding only).
 SLACK = 1e-9
 #: A brake longer than this many steps is not taken (the check would be too coarse).
@@ -246,3 +249,32 @@ def first_feasible(window: PlanWindow, tau: float, factor: float, rate: float,
             if good[0] and _within(window, rows[0], max_acceleration, max_jerk).all():
                 return c, k
     return None
+
+
+def ramp_candidates(f: float, rate: float, state: tuple[np.ndarray, np.ndarray, np.ndarray],
+                    error: float, h: float, strongest: float, max_jerk: np.ndarray,
+                    max_acceleration: np.ndarray) -> Iterator[tuple[float, float, bool]]:
+    """
+    Yield ``(f̈, K, True)`` in order of preference, made only as they are asked for.
+
+    ``f``, ``rate`` (``ḟ``) are the ramp's at the step's start, ``state`` the plan's own
+    velocity, acceleration and jerk there, ``error`` ``f* - f``, ``h`` the step (s),
+    ``strongest`` ``K₀``. The landing first (``(f̈, K, False)``, a step and one more to
+    rest at ``f*`` exactly), if its first instant keeps ``max_jerk``; then for
+    ``K = K₀ 4⁻ⁱ`` (:data:`CANDIDATES`) the step toward the slope whose grid brake at
+    ``K`` ends at ``f*`` (:func:`brake_rate`).
+    """
+    velocity, acceleration, jerk = state
+    landing = (error - 1.5 * rate * h) / (h * h)
+    reach = jerk_bounds(f, rate, velocity, acceleration, jerk, max_jerk, 1.0)
+    if reach[0] <= landing <= reach[1]:  # else its first instant breaks max_jerk
+        yield landing, max(abs(rate + landing * h) / h, strongest), False
+    low, high = rate_bounds(f, velocity, acceleration, max_acceleration)
+    c_low, c_high = jerk_bounds(f, rate, velocity, acceleration, jerk, max_jerk)
+    for brake in (strongest * CANDIDATES).tolist():
+        wanted = rate
+        for _ in range(2):  # the error after the step, f moving at (ḟ + wanted) / 2
+            left = error - h * (rate + wanted) / 2.0
+            wanted = math.copysign(brake_rate(abs(left), brake, h), left)
+        wanted = min(max(wanted, low), high)
+        yield min(max((wanted - rate) / h, c_low, -brake), c_high, brake), brake, True

@@ -40,21 +40,18 @@ No ROS here. Units: rad (or m), rad/s, rad/s², rad/s³, s; ns where named.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 import math
 
 import numpy as np
 from traj_gen_ros.node.speed.factor import check_factor
-from traj_gen_ros.node.speed.look_ahead import brake_rate, first_feasible
+from traj_gen_ros.node.speed.look_ahead import brake_rate, first_feasible, ramp_candidates
 from traj_gen_ros.node.speed.plan_window import PlanWindow
+from traj_gen_ros.node.speed.ramp_bounds import jerk_bounds, MARGIN, rate_bounds, RESTING
 
 #: The ramp's grid (ns): ``ḟ`` (or ``f̈``) is constant on each step.
 STEP_NS = 1_000_000
-#: The fraction ``σ`` of ``max_acceleration`` / ``max_jerk`` a ramp may use.
-MARGIN = 0.95
-#: Below this speed (rad/s) a joint sets no bound on ``ḟ``.
-RESTING = 1e-9
 #: Before this node time (ns) a question sets no origin (the schedule's "since forever").
 EARLIEST_NS = -(2 ** 61)
 #: ``f`` within this of ``f*`` is settled exactly there (under a jerk limit, with ``|ḟ|``
@@ -62,8 +59,6 @@ EARLIEST_NS = -(2 ** 61)
 #: acceleration by at most ``SETTLED_RATE · v_max``).
 SETTLED = 1e-6
 SETTLED_RATE = 1e-5
-#: The brakes tried under a jerk limit, as fractions of the strongest (:meth:`TimeMap._curvature`).
-CANDIDATES = 4.0 ** -np.arange(6)
 #: Under a jerk limit, at rest (``ḟ = 0``) the chunked check is tried every this many steps.
 RETRY = 4
 #: ``|ḟ|`` this close (relative) to the verified brake's curve to ``f*`` counts as on it:
@@ -73,48 +68,6 @@ ON_CURVE = 1e-3
 #: The scaled plan in effect at node time ``t`` (ns), as a :class:`PlanWindow`, and its
 #: own time ``τ`` (s) at the plan clock ``P`` (s); None where nothing scaled moves.
 PlanState = Callable[[int, float], tuple[PlanWindow, float] | None]
-
-
-def _interval(base: np.ndarray, bound: np.ndarray, velocity: np.ndarray
-              ) -> tuple[float, float]:
-    """Return the ``x`` with ``|base + x v| <= bound`` for every moving joint (∩)."""
-    moving = np.abs(velocity) > RESTING
-    if not moving.any():
-        return -math.inf, math.inf
-    v = velocity[moving]
-    low = (-bound[moving] - base[moving]) / v
-    high = (bound[moving] - base[moving]) / v
-    return float(np.max(np.minimum(low, high))), float(np.min(np.maximum(low, high)))
-
-
-def rate_bounds(f: float, velocity: np.ndarray, acceleration: np.ndarray,
-                max_acceleration: np.ndarray, margin: float = MARGIN) -> tuple[float, float]:
-    """
-    Return the interval of ``ḟ`` (1/s) keeping the commanded acceleration within its bound.
-
-    Per moving joint ``|f² a + ḟ v| <= B`` with ``B = max(σ a_max, f² |a|)`` (never worse
-    than the plan itself), i.e. ``ḟ`` between ``(±B - f² a) / v``; the intersection over
-    the joints. It always holds 0 (``|f² a| <= B``).
-    """
-    base = f * f * acceleration
-    bound = np.maximum(margin * max_acceleration, np.abs(base))
-    low, high = _interval(base, bound, velocity)
-    return min(low, 0.0), max(high, 0.0)
-
-
-def jerk_bounds(f: float, rate: float, velocity: np.ndarray, acceleration: np.ndarray,
-                jerk: np.ndarray, max_jerk: np.ndarray, margin: float = MARGIN
-                ) -> tuple[float, float]:
-    """
-    Return the interval of ``f̈`` (1/s²) keeping the commanded jerk within its bound.
-
-    Per moving joint ``|f³ j + 3 f ḟ a + f̈ v| <= B`` with ``B = max(σ j_max,
-    |f³ j + 3 f ḟ a|)``: ``f̈`` between ``(±B - f³ j - 3 f ḟ a) / v``. It holds 0.
-    """
-    base = f ** 3 * jerk + 3.0 * f * rate * acceleration
-    bound = np.maximum(margin * max_jerk, np.abs(base))
-    low, high = _interval(base, bound, velocity)
-    return min(low, 0.0), max(high, 0.0)
 
 
 @dataclass(frozen=True)
@@ -309,7 +262,8 @@ class TimeMap:
         moving = np.abs(velocity) > RESTING
         strongest = (MARGIN * float(np.min(self.max_jerk[moving] / np.abs(velocity[moving])))
                      if moving.any() else 1.0 / (h * h))
-        candidates = self._candidates(knot, state, error, h, strongest)
+        candidates = ramp_candidates(knot.factor, knot.rate, state, error, h, strongest,
+                                     self.max_jerk, self.max_acceleration)
         # Waiting at ḟ = 0 is safe for ever: then the dearer chunked check is made only on
         # every RETRY-th step (a ramp starts at most RETRY - 1 steps later for it); over
         # pieces of a higher degree than 3 (Bernstein bounds), never.
@@ -331,29 +285,3 @@ class TimeMap:
         low, high = jerk_bounds(f, rate, velocity, acceleration, jerk, jerk_limit, 1.0)
         brake = -math.copysign(min(strongest, abs(rate) / h), rate)
         return min(max(brake, low), high), strongest, None
-
-    def _candidates(self, knot: Knot, state: tuple[np.ndarray, np.ndarray, np.ndarray],
-                    error: float, h: float, strongest: float
-                    ) -> Iterator[tuple[float, float, bool]]:
-        """
-        Yield ``(f̈, K, True)`` in order of preference, made only as they are asked for.
-
-        The landing first (``(f̈, K, False)``, a step and one more to rest at ``f*``
-        exactly), if its first instant keeps ``max_jerk``; then for ``K = K₀ 4⁻ⁱ`` the
-        step toward the slope whose grid brake at ``K`` ends at ``f*``.
-        """
-        velocity, acceleration, jerk = state
-        f, rate = knot.factor, knot.rate
-        landing = (error - 1.5 * rate * h) / (h * h)
-        reach = jerk_bounds(f, rate, velocity, acceleration, jerk, self.max_jerk, 1.0)
-        if reach[0] <= landing <= reach[1]:  # else its first instant breaks max_jerk
-            yield landing, max(abs(rate + landing * h) / h, strongest), False
-        low, high = rate_bounds(f, velocity, acceleration, self.max_acceleration)
-        c_low, c_high = jerk_bounds(f, rate, velocity, acceleration, jerk, self.max_jerk)
-        for brake in (strongest * CANDIDATES).tolist():
-            wanted = rate
-            for _ in range(2):  # the error after the step, f moving at (ḟ + wanted) / 2
-                left = error - h * (rate + wanted) / 2.0
-                wanted = math.copysign(brake_rate(abs(left), brake, h), left)
-            wanted = min(max(wanted, low), high)
-            yield min(max((wanted - rate) / h, c_low, -brake), c_high, brake), brake, True
