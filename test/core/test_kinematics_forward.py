@@ -29,7 +29,7 @@ def sample(chain: Chain, count: int, seed: int = 0) -> np.ndarray:
 
 def finite_difference_jacobian(oracle: NumpyChain, chain: Chain, q: np.ndarray,
                                step: float = 1e-6) -> np.ndarray:
-    """The oracle's Jacobian by central differences: velocity, then angular velocity."""
+    """Return the oracle's Jacobian by central differences: velocity, then angular."""
     columns = []
     for k in range(q.size):
         poses = []

@@ -150,20 +150,26 @@ class Chain:
 
     @property
     def held(self) -> dict[str, float]:
-        """The positions of every other movable joint, by name (rad or m)."""
+        """Return the positions of every other movable joint, by name (rad or m)."""
         return self._configuration.held
 
     def describe(self) -> str:
-        """Return one line naming the chain: base → tool, the joints, any held on the way."""
-        held = [name for name in self._on_path if name not in self.joints
-                and self._tree.joints[name].type != 'fixed']
+        """Return one line naming the chain: base → tool, the joints, the others on the way."""
         text = (f'kinematic chain {self.base_frame} -> {self.tool_frame}: '
                 f'{len(self.joints)} joints {", ".join(self.joints)}')
+        moving = [name for name in self._on_path if name not in self.joints
+                  and self._tree.joints[name].type != 'fixed']
+        leaders = {name: self._tree.mimic_root(name)[0] for name in moving
+                   if self._tree.joints[name].mimic is not None}
+        following = [f'{name} mimics {leader}' for name, leader in leaders.items()
+                     if leader in self.joints]
+        values = self.held
+        held = [f'{name}={values[name]:g}' if name in values else f'{name} (neutral)'
+                for name in moving if leaders.get(name) not in self.joints]
+        if following:
+            text += '; ' + ', '.join(following)
         if held:
-            values = self.held
-            text += '; held on the way: ' + ', '.join(
-                f'{name}={values[name]:g}' if name in values else f'{name} (neutral)'
-                for name in held)
+            text += '; held on the way: ' + ', '.join(held)
         return text
 
     def _values(self, q: Sequence[float] | np.ndarray, what: str = 'q') -> np.ndarray:

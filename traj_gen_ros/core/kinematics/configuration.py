@@ -129,7 +129,7 @@ class Configuration:
 
     @property
     def held(self) -> dict[str, float]:
-        """Every joint held at a value, by name (rad or m); followers as they follow."""
+        """Return every joint held at a value, by name (rad or m), mimic joints as they follow."""
         values = self._follow(self._held.copy())
         chain = set(self.joints)
         return {name: float(values[position]) for position, name in enumerate(self.names)

@@ -9,7 +9,8 @@ One start of inverse kinematics: Levenberg–Marquardt within the limits, then l
    / (σ² + λ)) Uᵀ e`` from the SVD ``J = U Σ Vᵀ``, ``λ = μ (|e|² + 1e-6)``. A step that
    does not lower ``|e|`` is refused and ``μ`` raised eightfold; an accepted one halves it
    (down to 1). At most :data:`STEP_LIMIT` per joint and step; until ``|p* − p|`` and the
-   angle are within the tolerances, or for the iterations given.
+   angle are within the tolerances, or for the iterations given, or until it stalls
+   (:data:`STALL`).
 2. **Joint limits.** A step is cut short where a joint would leave its range, that joint
    put on its bound; a joint on a bound that the next step would push out is locked (the
    step solved again without it), so the other joints do the work. The locked joints of
@@ -40,6 +41,9 @@ NULL_LENGTHS = (1.0 / 64.0, 4.0)
 SLIDE_ITERATIONS, SLIDE_CORRECTIONS = 60, 4
 #: The null-space pull toward the seed counts as done below this, rad (or m).
 NULL_TOLERANCE = 1e-5
+#: A start has stalled when ``STALL[0]`` iterations lowered ``|e|²`` by less than the
+#: fraction ``STALL[1]`` (the closest it can come: out of reach, or a local minimum).
+STALL = (10, 1e-3)
 #: Damping floor (m² or rad²) of the Levenberg–Marquardt step, against singularities.
 DAMPING_FLOOR = 1e-6
 #: Singular values below this fraction of the largest count as the null space.
@@ -144,10 +148,14 @@ def _converge(chain: Any, target: np.ndarray, start: np.ndarray, lower: np.ndarr
     error = _error(pin, target, *chain._tool_pose(q))
     cost, mu = float(error @ error), 1.0
     locked = np.zeros(q.size, dtype=bool)
+    costs = []
     for iteration in range(iterations):
         if (math.hypot(*error[:3]) <= tolerances[0]
                 and math.hypot(*error[3:]) <= tolerances[1]):
             return Attempt(q, error, True, iteration, locked)
+        costs.append(cost)
+        if len(costs) > STALL[0] and cost > (1.0 - STALL[1]) * costs[-1 - STALL[0]]:
+            return Attempt(q, error, False, iteration, locked)  # a local minimum: stalled
         jacobian = chain._pose_and_jacobian(q)[2]
         step, locked = _step(jacobian, error, mu * (cost + DAMPING_FLOOR), q, lower, upper)
         trial = _within(q, step, lower, upper)
@@ -171,8 +179,7 @@ def _distance(q: np.ndarray, seed: np.ndarray, periodic: np.ndarray) -> float:
 
 
 def slide(chain: Any, target: np.ndarray, found: Attempt, seed: np.ndarray,
-           lower: np.ndarray, upper: np.ndarray, tolerances: tuple[float, float]
-           ) -> Attempt:
+          lower: np.ndarray, upper: np.ndarray, tolerances: tuple[float, float]) -> Attempt:
     """
     Move a converged ``found`` along the solutions toward the seed (least joint motion).
 
@@ -210,8 +217,8 @@ def slide(chain: Any, target: np.ndarray, found: Attempt, seed: np.ndarray,
 
 
 def descend(chain: Any, target: np.ndarray, start: np.ndarray, seed: np.ndarray,
-             lower: np.ndarray, upper: np.ndarray, tolerances: tuple[float, float],
-             iterations: int) -> Attempt:
+            lower: np.ndarray, upper: np.ndarray, tolerances: tuple[float, float],
+            iterations: int) -> Attempt:
     """Converge from ``start``, then slide toward the seed where there is spare freedom."""
     found = _converge(chain, target, np.clip(start, lower, upper), lower, upper, tolerances,
                       iterations)

@@ -177,12 +177,12 @@ def solve(chain: Any, target: np.ndarray, seed: np.ndarray, lower: Any, upper: A
     if not all(math.isfinite(value) and value > 0 for value in tolerances):
         raise ValueError(f'tolerances must be > 0 (m, rad), not {tolerances}')
     attempts = [descend(chain, target, seed, seed, lower, upper, tolerances,
-                         SEED_ITERATIONS)]
+                        SEED_ITERATIONS)]
     labels = ['seed']
     if not attempts[0].converged:
         for k, start in enumerate(restarts(chain, seed, lower, upper), start=1):
             attempts.append(descend(chain, target, start, seed, lower, upper, tolerances,
-                                     RESTART_ITERATIONS))
+                                    RESTART_ITERATIONS))
             labels.append(f'restart {k}')
     spent = sum(attempt.iterations for attempt in attempts)
     found = [(_nearest_turns(attempt.q, seed, lower, upper, chain.periodic), attempt, label)

@@ -144,6 +144,9 @@ class UrdfTree:
             if joint.mimic is not None and joint.mimic.leader not in joints:
                 raise ValueError(f'invalid URDF: joint {joint.name!r} mimics joint '
                                  f'{joint.mimic.leader!r}, which the URDF does not have')
+        for joint in joints.values():
+            if joint.mimic is not None and joint.type in SCALAR_TYPES:
+                self.mimic_root(joint.name)  # refuses circles and non-scalar leaders
 
     @classmethod
     def parse(cls, urdf_text: str | bytes) -> UrdfTree:
