@@ -60,6 +60,21 @@ def _download(target: Path) -> str:
     return ''
 
 
+def urdfs_in(cache: Path) -> dict[str, Path] | str:
+    """
+    Return the paths of :data:`FILES` under ``cache`` (fetching them once), or why not.
+
+    :param cache: pytest's cache data folder (``.pytest_cache/d``) or any other folder.
+    """
+    target = cache / f'example-robot-data-{VERSION}' / 'robots'
+    if not target.is_dir():
+        target.parent.mkdir(parents=True, exist_ok=True)
+        reason = _download(target)
+        if reason:
+            return reason
+    return {name: target / relative for name, relative in FILES.items()}
+
+
 def example_robot_data_urdfs(config: pytest.Config) -> dict[str, Path]:
     """
     Return the paths of the URDFs in :data:`FILES` by short name; skip if unavailable.
@@ -70,9 +85,7 @@ def example_robot_data_urdfs(config: pytest.Config) -> dict[str, Path]:
     if cache is None:
         pytest.skip("the example-robot-data URDFs need pytest's cache directory "
                     '(cacheprovider)')
-    target = Path(cache.mkdir(f'example-robot-data-{VERSION}')) / 'robots'
-    if not target.is_dir():
-        reason = _download(target)
-        if reason:
-            pytest.skip(reason)
-    return {name: target / relative for name, relative in FILES.items()}
+    found = urdfs_in(Path(cache.mkdir(f'example-robot-data-{VERSION}')).parent)
+    if isinstance(found, str):
+        pytest.skip(found)
+    return found

@@ -5,8 +5,8 @@ One start of inverse kinematics: Levenberg–Marquardt within the limits, then l
 
 1. **Levenberg–Marquardt** on the pose error ``e = (p* − p, log3(R* Rᵀ))`` (m and rad, in
    ``base_frame`` axes) with Sugihara's damping (*Solvability-unconcerned inverse
-   kinematics by the Levenberg–Marquardt method*, IEEE T-RO 27(5), 2011): ``Δq = V diag(σ
-   / (σ² + λ)) Uᵀ e`` from the SVD ``J = U Σ Vᵀ``, ``λ = μ (|e|² + 1e-6)``. A step that
+   kinematics by the Levenberg–Marquardt method*, IEEE T-RO 27(5), 2011): ``Δq = Jᵀ (J Jᵀ
+   + λ I)⁻¹ e`` (``V diag(σ / (σ² + λ)) Uᵀ e`` by the SVD), ``λ = μ (|e|² + 1e-6)``. A step that
    does not lower ``|e|`` is refused and ``μ`` raised eightfold; an accepted one halves it
    (down to 1). At most :data:`STEP_LIMIT` per joint and step; until ``|p* − p|`` and the
    angle are within the tolerances, or for the iterations given, or until it stalls
@@ -75,14 +75,16 @@ def _step(jacobian: np.ndarray, error: np.ndarray, damping: float, q: np.ndarray
     """
     Return the damped least-squares step on ``error`` at ``q`` and the joints it locks.
 
-    A joint at a limit that the step would push out is locked and the step solved again
-    without it.
+    ``Jᵀ (J Jᵀ + λ I)⁻¹ e``, the same as ``V diag(σ / (σ² + λ)) Uᵀ e`` from the SVD, in a
+    6×6 solve. A joint at a limit that the step would push out is locked and the step
+    solved again without it.
     """
     free = np.ones(q.size, dtype=bool)
+    identity = damping * np.eye(jacobian.shape[0])
     while True:
-        u, s, vt = np.linalg.svd(jacobian[:, free], full_matrices=False)
+        columns = jacobian if free.all() else jacobian[:, free]
         step = np.zeros(q.size)
-        step[free] = vt.T @ (s / (s * s + damping) * (u.T @ error))
+        step[free] = columns.T @ np.linalg.solve(columns @ columns.T + identity, error)
         out = free & (((q <= lower) & (step < 0)) | ((q >= upper) & (step > 0)))
         if not out.any():
             return step, ~free
@@ -128,6 +130,9 @@ def _within(q: np.ndarray, step: np.ndarray, lower: np.ndarray,
     largest = float(np.abs(step).max())
     if largest > limit:
         step = step * (limit / largest)
+    trial = q + step
+    if (trial >= lower).all() and (trial <= upper).all():
+        return trial
     room = np.full(q.size, math.inf)
     rising, falling = step > 0, step < 0
     room[rising] = (upper[rising] - q[rising]) / step[rising]

@@ -126,13 +126,11 @@ def restarts(chain: Any, seed: np.ndarray, lower: np.ndarray,
 
 def _nearest_turns(q: np.ndarray, seed: np.ndarray, lower: np.ndarray, upper: np.ndarray,
                    periodic: np.ndarray) -> np.ndarray:
-    q = q.copy()
-    for k in np.flatnonzero(periodic):
-        turns = round((seed[k] - q[k]) / _TURN)
-        options = [q[k] + _TURN * n for n in (turns - 1, turns, turns + 1)]
-        options = [value for value in options if lower[k] <= value <= upper[k]] + [q[k]]
-        q[k] = min(options, key=lambda value: abs(value - seed[k]))
-    return q
+    """Move each periodic joint by the whole turns that bring it nearest ``seed`` in limits."""
+    turns = np.where(periodic, np.round((seed - q) / _TURN), 0.0)
+    options = q + _TURN * (turns + np.array([[0.0], [-1.0], [1.0]]) * periodic)
+    options = np.where((options >= lower) & (options <= upper), options, q)
+    return options[np.argmin(np.abs(options - seed), axis=0), np.arange(q.size)]
 
 
 def _refusal(chain: Any, best: Attempt, starts: int, lower: np.ndarray,
