@@ -186,6 +186,18 @@ def test_prismatic_floating_base_and_mimic_chains_round_trip(pytestconfig):
             reached(model, case, case.inverse(target, seed).q, target)
 
 
+def test_a_chain_read_backwards_solves_too(pytestconfig):
+    """The base frame moves with every joint: the tool0's base seen from the tool."""
+    urdf = robot_urdf(pytestconfig, 'erd', 'ur10')
+    chain = Chain.from_urdf(urdf.encode(), UR, base_frame='tool0', tool_frame='base_link')
+    oracle = NumpyChain(urdf)
+    rng = np.random.default_rng(17)
+    for q in within_limits(chain, 10, seed=18):
+        target = chain.forward(q)
+        seed = np.clip(q + rng.uniform(-0.3, 0.3, 6), chain.lower, chain.upper)
+        reached(oracle, chain, chain.inverse(target, seed).q, target)
+
+
 def test_out_of_reach_is_refused_saying_how_close_it_came(panda):
     chain, _, _ = panda
     target = chain.forward(np.zeros(7))

@@ -88,13 +88,15 @@ class Chain:
         self._world_aligned = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
     @classmethod
-    def from_urdf(cls, urdf_text: str, joints: Sequence[str], base_frame: str | None = None,
+    def from_urdf(cls, urdf_text: str | bytes, joints: Sequence[str],
+                  base_frame: str | None = None,
                   tool_frame: str | None = None,
                   held: Mapping[str, float] | None = None) -> Chain:
         """
         Build the chain from ``base_frame`` to ``tool_frame`` that ``joints`` move.
 
-        :param urdf_text: the URDF document (the ``robot_description``).
+        :param urdf_text: the URDF document (the ``robot_description``; bytes are read as
+            UTF-8).
         :param joints: the joint names, in the order of every ``q``; each a revolute,
             continuous or prismatic joint of the URDF that mimics none.
         :param base_frame: a link; None: the URDF's root link.
@@ -107,6 +109,8 @@ class Chain:
             message names the missing ones and the joints the chain has).
         :raises ImportError: Pinocchio is not installed.
         """
+        if isinstance(urdf_text, bytes):
+            urdf_text = urdf_text.decode('utf-8', errors='replace')
         tree = UrdfTree.parse(urdf_text)
         joints = _check_joints(tree, joints)
         base = tree.root if base_frame is None else tree.check_link(base_frame, 'base_frame')
@@ -141,8 +145,9 @@ class Chain:
         """
         Hold joints that are not the chain's at ``values`` (rad or m, by name).
 
-        Names the URDF's movable joints lack, the chain's own joints and mimic joints are
-        ignored; a joint not named keeps its value (at first 0).
+        A name that is no revolute, continuous or prismatic joint of the URDF, the chain's
+        own joints and mimic joints (they follow their leaders) are ignored; a joint not
+        named keeps its value (at first 0). Floating and planar joints stay at the identity.
 
         :raises ValueError: a value is not a finite number.
         """
