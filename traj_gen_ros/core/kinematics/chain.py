@@ -26,9 +26,10 @@ from traj_gen_ros.core.kinematics.urdf_tree import listing, SCALAR_TYPES, UrdfTr
 
 
 def _check_joints(tree: UrdfTree, joints: Sequence[str]) -> tuple[str, ...]:
+    if not isinstance(joints, str):
+        joints = tuple(joints)
     if isinstance(joints, str) or not all(isinstance(name, str) for name in joints):
         raise ValueError(f'joints must be a sequence of joint names, not {joints!r}')
-    joints = tuple(joints)
     movable = [joint.name for joint in tree.joints.values()
                if joint.type in SCALAR_TYPES and joint.mimic is None]
     if not joints:
@@ -48,6 +49,12 @@ def _check_joints(tree: UrdfTree, joints: Sequence[str]) -> tuple[str, ...]:
             raise ValueError(f'joint {name!r} mimics {joint.mimic.leader!r}: it follows its '
                              'leader and cannot be one of the joints')
     return joints
+
+
+def _frozen(values: Any) -> np.ndarray:
+    array = np.array(values)
+    array.setflags(write=False)
+    return array
 
 
 class Chain:
@@ -74,11 +81,12 @@ class Chain:
         self.joints, self.base_frame, self.tool_frame = joints, base_frame, tool_frame
         self.links = tree.links
         self._on_path = on_path
-        self.lower = np.array([tree.joints[name].lower for name in joints])
-        self.upper = np.array([tree.joints[name].upper for name in joints])
         self._configuration = Configuration(pin, model, tree, joints)
-        self.angular = np.array([tree.joints[name].type != 'prismatic' for name in joints])
-        self.periodic = self._configuration.periodic
+        self.lower, self.upper, self.angular, self.periodic = (_frozen(array) for array in (
+            [tree.joints[name].lower for name in joints],
+            [tree.joints[name].upper for name in joints],
+            [tree.joints[name].type != 'prismatic' for name in joints],
+            self._configuration.periodic))
         self._frames = {link: model.getFrameId(link, pin.FrameType.BODY) for link in tree.links}
         self._tool, self._base = self._frames[tool_frame], self._frames[base_frame]
         self._base_is_world = base_frame == tree.root

@@ -160,7 +160,7 @@ def _converge(chain: Any, target: np.ndarray, start: np.ndarray, lower: np.ndarr
             return Attempt(q, error, True, iteration, locked)
         costs.append(cost)
         if len(costs) > STALL[0] and cost > (1.0 - STALL[1]) * costs[-1 - STALL[0]]:
-            return Attempt(q, error, False, iteration, locked)  # a local minimum: stalled
+            break  # a local minimum: stalled
         jacobian = chain._pose_and_jacobian(q)[2]
         step, locked = _step(jacobian, error, mu * (cost + DAMPING_FLOOR), q, lower, upper)
         trial = _within(q, step, lower, upper)
@@ -171,10 +171,16 @@ def _converge(chain: Any, target: np.ndarray, start: np.ndarray, lower: np.ndarr
         else:
             mu *= 8.0
             if mu > 1e12:
-                return Attempt(q, error, False, iteration + 1, locked)
-    converged = (math.hypot(*error[:3]) <= tolerances[0]
-                 and math.hypot(*error[3:]) <= tolerances[1])
-    return Attempt(q, error, converged, iterations, locked)
+                break
+    else:
+        iteration = iterations
+        if (math.hypot(*error[:3]) <= tolerances[0]
+                and math.hypot(*error[3:]) <= tolerances[1]):
+            return Attempt(q, error, True, iterations, locked)
+    # Not converged: the joints that the limits hold where it ended.
+    jacobian = chain._pose_and_jacobian(q)[2]
+    locked = _step(jacobian, error, mu * (cost + DAMPING_FLOOR), q, lower, upper)[1]
+    return Attempt(q, error, False, iteration, locked)
 
 
 def _distance(q: np.ndarray, seed: np.ndarray, periodic: np.ndarray) -> float:
@@ -208,12 +214,13 @@ def slide(chain: Any, target: np.ndarray, found: Attempt, seed: np.ndarray,
             if curvature > 0.0:
                 length = min(float(moved @ moved) / curvature, NULL_LENGTHS[1])
         trial = _within(best.q, length * pull, lower, upper, NULL_STEP_LIMIT)
-        moved = _converge(chain, target, trial, lower, upper, tolerances, SLIDE_CORRECTIONS)
-        spent += moved.iterations
-        nearer = _distance(moved.q, seed, periodic)
-        if moved.converged and nearer < distance:
+        corrected = _converge(chain, target, trial, lower, upper, tolerances,
+                              SLIDE_CORRECTIONS)
+        spent += corrected.iterations
+        nearer = _distance(corrected.q, seed, periodic)
+        if corrected.converged and nearer < distance:
             memory = (best.q, pull)
-            best, distance = moved, nearer
+            best, distance = corrected, nearer
         else:
             memory, length = None, length / 4
             if length < NULL_LENGTHS[0]:

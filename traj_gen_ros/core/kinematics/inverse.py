@@ -80,7 +80,10 @@ def _limits(chain: Any, lower: Any, upper: Any) -> tuple[np.ndarray, np.ndarray]
     count = len(chain.joints)
     bounds = []
     for name, values in (('lower', lower), ('upper', upper)):
-        array = np.asarray(values, dtype=float)
+        try:
+            array = np.asarray(values, dtype=float)
+        except (TypeError, ValueError):
+            array = np.full(1, math.nan)
         if array.shape != (count,) or np.isnan(array).any():
             raise ValueError(f'{name} limits must be {count} numbers (rad or m, ±inf: none), '
                              f'one per joint of {", ".join(chain.joints)}; got {values!r}')
