@@ -17,12 +17,12 @@ import sys  # noqa: E402
 import time  # noqa: E402
 import timeit  # noqa: E402
 
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / 'test' / 'support'))  # the tests' fetcher of the URDF
+
+from example_robot_data import urdfs_in  # noqa: E402
 import numpy as np  # noqa: E402
 from traj_gen_ros.core.kinematics import Chain, pose_distance  # noqa: E402
-
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / 'test' / 'support'))
-from example_robot_data import urdfs_in  # noqa: E402
 
 POSES = 300
 GOAL_DISTANCE = 0.2  # m: the seed's tool pose is at most this far from the goal
