@@ -110,7 +110,8 @@ def test_joints_off_the_joint_set_on_the_way_are_held_and_named(pytestconfig):
         'kinematic chain world -> wrist_3_link: 5 joints shoulder_lift_joint, elbow_joint, '
         'wrist_1_joint, wrist_2_joint, wrist_3_joint; held on the way: '
         'shoulder_pan_joint=0.3')
-    full = Chain.from_urdf(urdf, UR)
+    full = Chain.from_urdf(urdf, UR, base_frame='', tool_frame='')  # '': the defaults
+    assert (full.base_frame, full.tool_frame) == ('world', 'wrist_3_link')
     q = np.array([-1.2, 1.5, -1.0, -1.3, 0.5])
     assert np.abs(chain.forward(q) - full.forward([0.3, *q])).max() < 1e-12
     floating = Chain.from_urdf(FLOATING_ARM, ['j1', 'j2', 'j3'], tool_frame='tool')

@@ -107,9 +107,10 @@ class Chain:
             UTF-8).
         :param joints: the joint names, in the order of every ``q``; each a revolute,
             continuous or prismatic joint of the URDF that mimics none.
-        :param base_frame: a link; None: the URDF's root link.
-        :param tool_frame: a link; None: the end of the fixed joints below the child link
-            of ``joints[-1]`` where there is one end, else that child link.
+        :param base_frame: a link; None (or '', an unset string parameter): the URDF's
+            root link.
+        :param tool_frame: a link; None (or ''): the end of the fixed joints below the
+            child link of ``joints[-1]`` where there is one end, else that child link.
         :param held: positions (rad or m) of other joints, by name (:meth:`hold`).
         :raises ValueError: the URDF is not valid or Pinocchio cannot read it; a joint
             unknown, not movable, a mimic joint or named twice; an unknown link (the
@@ -121,8 +122,8 @@ class Chain:
             urdf_text = urdf_text.decode('utf-8', errors='replace')
         tree = UrdfTree.parse(urdf_text)
         joints = _check_joints(tree, joints)
-        base = tree.root if base_frame is None else tree.check_link(base_frame, 'base_frame')
-        if tool_frame is None:
+        base = tree.root if not base_frame else tree.check_link(base_frame, 'base_frame')
+        if not tool_frame:
             tool = tree.fixed_end(tree.joints[joints[-1]].child)
         else:
             tool = tree.check_link(tool_frame, 'tool_frame')
