@@ -2,8 +2,10 @@
 Core speed, measured against named peers in the same run (`make bench`).
 
 Prints microseconds per plan against ruckig, plan + sample of a via-point spline against
-scipy's CubicSpline, and sampling throughput, each with its target. Then runs the node
-latency benchmark (benchmarks/node_latency.py) when it is there.
+scipy's CubicSpline, and sampling throughput, each with its target. Then the kinematics
+(benchmarks/kinematics.py: inverse kinematics p50/p99, forward kinematics per call, beside
+Pinocchio's own calls) and the node latency benchmark (benchmarks/node_latency.py) when
+it is there.
 """
 
 import os
@@ -203,6 +205,13 @@ def sampling() -> None:
            'faster than ruckig')
 
 
+def kinematics() -> None:
+    """Run benchmarks/kinematics.py in its own process (Pinocchio loads only there)."""
+    sys.stdout.flush()
+    subprocess.run([sys.executable, str(Path(__file__).with_name('kinematics.py'))],
+                   check=True)
+
+
 def node_latency() -> None:
     script = Path(__file__).with_name('node_latency.py')
     if script.exists():
@@ -216,4 +225,5 @@ if __name__ == '__main__':
     scurve_moving_state()
     via_spline()
     sampling()
+    kinematics()
     node_latency()
