@@ -290,5 +290,3 @@ POSE = Planner(plan_pose)
 #: Each request subscription's message type: how its messages are read and planned.
 READERS = {JointState: (goal_request, PIPELINE), JointTrajectory: (via_request, PIPELINE),
            PoseStamped: (pose_request, POSE)}
-
-
