@@ -13,7 +13,7 @@ import math
 from pathlib import Path
 import tempfile
 
-from diagnostic_msgs.msg import DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from node_harness import Probe, running_node, stamp_ns
 import numpy as np
@@ -105,6 +105,11 @@ def test_a_pose_goal_ends_within_a_tenth_of_a_millimetre_and_a_milliradian(urdf)
     chain = NumpyChain(urdf)
     with session(urdf) as (node, probe):
         assert f'kinematic chain {BASE} -> {TOOL}: 7 joints' in node.output()
+        probe.diagnostics = []
+        probe.create_subscription(DiagnosticArray, '/diagnostics', probe.diagnostics.append, 10)
+        probe.spin_until(lambda: probe.diagnostics, 10.0, '/diagnostics')
+        values = {kv.key: kv.value for kv in probe.diagnostics[-1].status[0].values}
+        assert values['kinematics'].startswith(f'kinematic chain {BASE} -> {TOOL}')
         start, here = tool_at_rest(probe, chain)
         target = here @ transform(rpy_matrix(0.1, -0.15, 0.2), np.zeros(3))
         target[:3, 3] += [0.06, -0.08, -0.1]

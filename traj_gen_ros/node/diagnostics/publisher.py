@@ -133,7 +133,8 @@ class NodeDiagnostics:
             limits=self._limits_summary(config), urdf_source=self._limits.source,
             urdf_problem=self._limits.problem, counts=self._answers.counts,
             outside=self.check_ranges(),
-            feedback=self._measured() if self._measured else None)
+            feedback=self._measured() if self._measured else None,
+            kinematics='' if self._limits.source == 'none' else config.kinematics.describe())
         status = DiagnosticStatus(level=bytes([level]), name=self._name, message=message,
                                   hardware_id='',
                                   values=[KeyValue(key=k, value=v) for k, v in values])

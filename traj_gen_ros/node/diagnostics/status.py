@@ -118,8 +118,8 @@ class MotionLog:
 def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str,
                 motion: str, limits: str, urdf_source: str, urdf_problem: str,
                 counts: RequestCounts, outside: str = '',
-                feedback: tuple[int, str, list[tuple[str, str]]] | None = None
-                ) -> tuple[int, str, list[tuple[str, str]]]:
+                feedback: tuple[int, str, list[tuple[str, str]]] | None = None,
+                kinematics: str = '') -> tuple[int, str, list[tuple[str, str]]]:
     """
     Build the node's diagnostic status: ``(level, message, [(key, value), …])``.
 
@@ -131,6 +131,8 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
     :param urdf_problem: why the last robot description was refused ('' if none was).
     :param outside: the setpoint's joints outside their range (``outside_ranges``), or ''.
     :param feedback: the measured state's level, problem and values, or None (standalone).
+    :param kinematics: the kinematic chain in force, or why a URDF gives none ('' without
+        a URDF).
     """
     problems = []
     feedback_level = OK
@@ -164,6 +166,8 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
     ]
     if urdf_problem:
         values.append(('robot_description refused', urdf_problem))
+    if kinematics:
+        values.append(('kinematics', kinematics))
     if outside:
         values.append(('outside range', outside))
     if feedback is not None:
