@@ -17,7 +17,7 @@ setup(
         ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
     ],
     # What requirements.txt pins, unpinned: the ROS packages come from the ROS install.
-    install_requires=['setuptools', 'numpy', 'matplotlib', 'lxml', 'ruckig'],
+    install_requires=['setuptools', 'numpy', 'matplotlib', 'lxml', 'ruckig', 'pin'],
     zip_safe=True,
     maintainer='traj_gen_ros maintainers',
     maintainer_email='maintainers@traj-gen-ros.org',

@@ -2,10 +2,11 @@
 Core speed, measured against named peers in the same run (`make bench`).
 
 Prints microseconds per plan against ruckig, plan + sample of a via-point spline against
-scipy's CubicSpline, and sampling throughput, each with its target. Then runs the node
-latency benchmark (benchmarks/node_latency.py) and the graph-join benchmark
-(benchmarks/joins.py: 50 processes joining while the node streams at 500 Hz, against the
-node without its transport choice) when they are there.
+scipy's CubicSpline, and sampling throughput, each with its target. Then the kinematics
+(benchmarks/kinematics.py: inverse kinematics p50/p99, forward kinematics per call, beside
+Pinocchio's own calls), the node latency benchmark (benchmarks/node_latency.py) and the
+graph-join benchmark (benchmarks/joins.py: 50 processes joining while the node streams at
+500 Hz, against the node without its transport choice) when they are there.
 """
 
 import os
@@ -205,6 +206,13 @@ def sampling() -> None:
            'faster than ruckig')
 
 
+def kinematics() -> None:
+    """Run benchmarks/kinematics.py in its own process (Pinocchio loads only there)."""
+    sys.stdout.flush()
+    subprocess.run([sys.executable, str(Path(__file__).with_name('kinematics.py'))],
+                   check=True)
+
+
 def node_latency() -> None:
     script = Path(__file__).with_name('node_latency.py')
     if script.exists():
@@ -225,5 +233,6 @@ if __name__ == '__main__':
     scurve_moving_state()
     via_spline()
     sampling()
+    kinematics()
     node_latency()
     graph_joins()

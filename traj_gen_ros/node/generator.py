@@ -50,6 +50,7 @@ import sys
 import threading
 import time
 
+from geometry_msgs.msg import PoseStamped
 import numpy as np
 import rclpy
 from rclpy.exceptions import ParameterException
@@ -71,6 +72,7 @@ from traj_gen_ros.node.requests.thread import NotForTheExecutor, RequestThread
 from traj_gen_ros.node.robot.command_publisher import CommandOutput
 from traj_gen_ros.node.robot.joint_feedback import JointFeedback
 from traj_gen_ros.node.robot.measured_state import MeasuredState
+from traj_gen_ros.node.robot.tool_pose import each_setpoint, ToolPoseOutput
 from traj_gen_ros.node.settings.config import Config, initial_state, make_config
 from traj_gen_ros.node.settings.parameters import (
     declare_parameters,
@@ -124,7 +126,11 @@ class TrajectoryGenerator(Node):
                               lambda: self._config.period_ns,
                               self._rate_meter.wrap(publish), self.get_logger().error,
                               waiting=measured is not None,
-                              publish_command=self._commands.stream_command,
+                              publish_command=each_setpoint(
+                                  self._commands.stream_command,
+                                  ToolPoseOutput(self, lambda: self._config.kinematics,
+                                                 self._now_ns, reliable)
+                                  if self.get_parameter('publish_tool_pose').value else None),
                               time_map=self._time_map,
                               publish_factor=SpeedScalingInput.output(self),
                               on_late=self._rate_meter.late,
@@ -151,8 +157,12 @@ class TrajectoryGenerator(Node):
         self._via_subscription = self.create_subscription(
             JointTrajectory, '~/via_points', self._on_via_points, REQUEST_DEPTH, raw=True,
             callback_group=requests_only)
+        self._pose_subscription = self.create_subscription(
+            PoseStamped, '~/pose_goal', self._on_pose_goal, REQUEST_DEPTH, raw=True,
+            callback_group=requests_only)
         self._request_thread = RequestThread(
-            self.context, [self._goal_subscription, self._via_subscription],
+            self.context, [self._goal_subscription, self._via_subscription,
+                           self._pose_subscription],
             self.get_logger().error)
         self.create_service(Trigger, '~/stop', self._on_stop)
         # ~/follow_joint_trajectory where control_msgs is importable (action/server.py)
@@ -218,6 +228,9 @@ class TrajectoryGenerator(Node):
     def _on_via_points(self, data: bytes, info: dict) -> None:
         self._requests.take(self._via_subscription, JointTrajectory, (data, info))
 
+    def _on_pose_goal(self, data: bytes, info: dict) -> None:
+        self._requests.take(self._pose_subscription, PoseStamped, (data, info))
+
     def _on_stop(self, request: Trigger.Request, response: Trigger.Response
                  ) -> Trigger.Response:
         del request
@@ -248,7 +261,7 @@ class TrajectoryGenerator(Node):
         config = make_config(**self._parameter_values())
         limits = self._limits.in_force(config.max_velocity)
         return dataclasses.replace(config, max_velocity=np.array(limits.velocity),
-                                   limits=limits)
+                                   limits=limits, kinematics=self._limits.kinematics)
 
     def _check_config(self, parameters: list[Parameter]) -> str | None:
         """Say why the changed ``CONFIG_PARAMETERS`` make no valid ``Config``, or None."""

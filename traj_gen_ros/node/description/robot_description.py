@@ -40,6 +40,7 @@ from traj_gen_ros.node.description.joint_limits import (
     urdf_limits,
     UrdfLimits,
 )
+from traj_gen_ros.node.description.kinematics import build_kinematics, RobotKinematics
 
 #: What robot_state_publisher offers on ``robot_description``: the last URDF, kept.
 DESCRIPTION_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
@@ -66,7 +67,14 @@ class NodeLimits:
         self.problem = ''
         self._parameter_text = ''
         self._logged = ''
+        self._frames = (node.get_parameter('base_frame').value,
+                        node.get_parameter('tool_frame').value)
+        #: The kinematic chain of the URDF in force (or why there is none).
+        self.kinematics = RobotKinematics()
         self._take_parameter(node.get_parameter('robot_description').value)
+        if self.kinematics.chain is None and self.source != 'none' and any(self._frames):
+            raise ValueError(f'base_frame {self._frames[0]!r} / tool_frame '
+                             f'{self._frames[1]!r}: {self.kinematics.problem}')
         self._subscription = node.create_subscription(
             String, 'robot_description', self._on_description, DESCRIPTION_QOS)
 
@@ -88,6 +96,19 @@ class NodeLimits:
         self._parameter_text = text
         self.source = 'parameter robot_description' if text else 'none'
         self._report_urdf()
+        self._take_kinematics(text)
+
+    def _take_kinematics(self, text: str) -> None:
+        """Build the chain of the URDF now in force; log it (INFO) or why none (WARN)."""
+        self.kinematics = build_kinematics(text, self._joints, *self._frames)
+        if self.source == 'none':
+            return
+        logger = self._node.get_logger()
+        if self.kinematics.chain is not None:
+            logger.info(f'{self.kinematics.describe()} (URDF: {self.source})')
+        else:
+            logger.warning(f'{self.kinematics.problem} (URDF: {self.source}): tool-frame '
+                           'requests are refused')
 
     def _on_description(self, message: String) -> None:
         topic = self._subscription.topic_name
@@ -102,6 +123,7 @@ class NodeLimits:
         self.source = f'topic {topic}' if message.data else 'none'
         self.problem = ''
         self._report_urdf()
+        self._take_kinematics(message.data)
         for changed in self._listeners:
             changed()
 

@@ -157,7 +157,8 @@ class NodeDiagnostics:
             urdf_problem=self._limits.problem, counts=self._answers.counts,
             outside=self.check_ranges(),
             feedback=self._measured() if self._measured else None,
-            late=(self._meter.late_ticks, self._meter.held_back_ns))
+            late=(self._meter.late_ticks, self._meter.held_back_ns),
+            kinematics='' if self._limits.source == 'none' else config.kinematics.describe())
         self._log_late()
         status = DiagnosticStatus(level=bytes([level]), name=self._name, message=message,
                                   hardware_id='',

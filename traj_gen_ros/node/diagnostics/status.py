@@ -140,7 +140,8 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
                 motion: str, limits: str, urdf_source: str, urdf_problem: str,
                 counts: RequestCounts, outside: str = '',
                 feedback: tuple[int, str, list[tuple[str, str]]] | None = None,
-                late: tuple[int, int] = (0, 0)) -> tuple[int, str, list[tuple[str, str]]]:
+                late: tuple[int, int] = (0, 0),
+                kinematics: str = '') -> tuple[int, str, list[tuple[str, str]]]:
     """
     Build the node's diagnostic status: ``(level, message, [(key, value), …])``.
 
@@ -153,6 +154,8 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
     :param outside: the setpoint's joints outside their range (``outside_ranges``), or ''.
     :param feedback: the measured state's level, problem and values, or None (standalone).
     :param late: the late ticks since start and how long they held the schedule back (ns).
+    :param kinematics: the kinematic chain in force, or why a URDF gives none ('' without
+        a URDF).
     """
     problems = []
     feedback_level = OK
@@ -188,6 +191,8 @@ def node_status(*, rate: float | None, rate_hz: float, joints: int, profile: str
     ]
     if urdf_problem:
         values.append(('robot_description refused', urdf_problem))
+    if kinematics:
+        values.append(('kinematics', kinematics))
     if outside:
         values.append(('outside range', outside))
     if feedback is not None:

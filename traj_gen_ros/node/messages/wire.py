@@ -249,3 +249,19 @@ def peek_via_points(data: bytes) -> tuple[str, int]:
 def factor_cdr(factor: float) -> bytes:
     """Serialise a ``control_msgs/SpeedScalingFactor`` (one float64) to CDR bytes."""
     return _ENCAPSULATION + struct.pack('<d', factor)
+
+
+def pose_stamped_cdr(stamp_ns: int, frame_id: str, position: np.ndarray,
+                     quaternion: np.ndarray) -> bytes:
+    """
+    Serialise a ``geometry_msgs/PoseStamped``: ``position`` (m), ``quaternion`` (x, y, z, w).
+
+    :param stamp_ns: ``header.stamp`` in nanoseconds.
+    """
+    seconds, nanoseconds = divmod(int(stamp_ns), _NANOSECONDS_PER_SECOND)
+    frame = _write_string(frame_id, 8)
+    pad = b'\x00' * ((-(8 + len(frame))) % 8)  # the doubles on an 8-boundary
+    return b''.join((_ENCAPSULATION, seconds.to_bytes(4, 'little', signed=True),
+                     nanoseconds.to_bytes(4, 'little'), frame, pad,
+                     np.asarray(position, dtype='<f8').tobytes(),
+                     np.asarray(quaternion, dtype='<f8').tobytes()))

@@ -7,7 +7,7 @@ request through at a time.
 
 1. *take* (:meth:`RequestHandler.take`): the request that woke the callback and every
    request waiting behind it (a burst is drained in one callback: only the newest runs);
-2. *parse* (:func:`goal_request`, :func:`via_request`; :mod:`traj_gen_ros.node.messages.parsing`,
+2. *read* (:mod:`traj_gen_ros.node.requests.reading`; :mod:`traj_gen_ros.node.messages.parsing`,
    the bytes read by :mod:`traj_gen_ros.node.messages.wire`): a malformed one is refused at once;
    the older valid ones are answered "superseded";
 3. *validate and plan* the newest (a :class:`Planner`: :data:`PIPELINE`, :func:`plan_request` of
@@ -42,24 +42,16 @@ import threading
 import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import PoseStamped
 import numpy as np
-from rclpy.serialization import deserialize_message
 from rclpy.subscription import Subscription
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
-from traj_gen_ros.node.messages.parsing import (
-    check_no_effort,
-    MAX_VIA_POINTS,
-    parse_goal,
-    parse_via,
-    RequestError,
-    seconds,
-    too_many_points,
-)
-from traj_gen_ros.node.messages.wire import peek_via_points, read_goal
 from traj_gen_ros.node.planning.motion import held, PlannedMotion, State
 from traj_gen_ros.node.planning.pipeline import plan_request, plan_stop
+from traj_gen_ros.node.planning.pose_goal import plan_pose
 from traj_gen_ros.node.requests.answers import Answers
+from traj_gen_ros.node.requests.reading import goal_request, pose_request, via_request
 from traj_gen_ros.node.requests.request import Request, RequestListener
 from traj_gen_ros.node.requests.start_tick import PLAN_ATTEMPTS, Planner, StartTick
 from traj_gen_ros.node.settings.config import Config
@@ -133,17 +125,17 @@ class RequestHandler:
         info's ``received_timestamp`` (ns, system clock: when DDS received it) goes into
         the answer as ``received``.
         """
-        parse = via_request if message_type is JointTrajectory else goal_request
+        parse, planner = READERS[message_type]
         try:
             with self._lock:
-                self._take_newest(subscription, message_type, first, parse)
+                self._take_newest(subscription, message_type, first, parse, planner)
         finally:
             self._pace()
 
     def _take_newest(self, subscription: Subscription, message_type: type,
                      first: tuple[bytes, dict],
-                     parse: Callable[[bytes, int, Sequence[str], Answers], Request | None]
-                     ) -> None:
+                     parse: Callable[[bytes, int, Sequence[str], Answers], Request | None],
+                     planner: Planner) -> None:
         """Drain the subscription after ``first``; execute the newest valid request."""
         waiting = [first]
         with subscription.handle:
@@ -159,7 +151,7 @@ class RequestHandler:
         if parsed:
             self._answers.superseded(parsed[:-1])
             newest = parsed[-1]
-            self.execute(newest, PIPELINE)
+            self.execute(newest, planner)
 
     def _pace(self) -> None:
         """End a request callback no sooner than ``REQUEST_ROUND_PERIOD`` after the last one."""
@@ -293,56 +285,8 @@ PIPELINE = Planner(plan_request)
 #: ``~/stop`` and the action's cancel: a brake from the commanded state, never slowed. It
 #: shares the splice, not the checks: it always runs.
 BRAKE = Planner(_brake, commanded=True)
-
-
-def goal_request(data: bytes, received: int, joints: Sequence[str],
-                 answers: Answers) -> Request | None:
-    """
-    Read a serialised goal into a :class:`Request`, or refuse it (ERROR) and return ``None``.
-
-    ``received`` (ns, system clock) goes into its answers; ``joints`` is the joint set.
-    """
-    fields = read_goal(data)
-    if fields is None:  # not the usual little-endian CDR: let rclpy read it
-        try:
-            message = deserialize_message(data, JointState)
-        except Exception as error:  # noqa: BLE001 - wire bytes must never kill the node
-            answers.refused(Request('goal', answers.values('goal', '', received), 0, None),
-                            f'malformed message: {error}')
-            return None
-        fields = message.header.frame_id, message.name, message.position
-    frame_id, names, positions = fields
-    request = Request('goal', answers.values('goal', frame_id, received), 0, None)
-    try:
-        request.parsed = parse_goal(joints, names, positions)
-    except RequestError as error:
-        answers.refused(request, str(error))
-        return None
-    return request
-
-
-def via_request(data: bytes, received: int, joints: Sequence[str],
-                answers: Answers) -> Request | None:
-    """:func:`goal_request` for a serialised ``JointTrajectory``; a huge one is not built."""
-    frame_id, count = peek_via_points(data)
-    values = answers.values('via_points', frame_id, received)
-    if count > MAX_VIA_POINTS:  # refused before one Python object per point is made
-        answers.refused(Request('via_points', values, 0, None), too_many_points(count))
-        return None
-    try:
-        message = deserialize_message(data, JointTrajectory)
-    except Exception as error:  # noqa: BLE001 - bytes from the wire must never kill the node
-        answers.refused(Request('via_points', values, 0, None), f'malformed message: {error}')
-        return None
-    stamp = message.header.stamp
-    stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # 0 or past: "now"
-    request = Request('via_points', values, stamp_ns, None)
-    points = [(p.positions, p.velocities, p.accelerations, seconds(p.time_from_start))
-              for p in message.points]
-    try:
-        check_no_effort([p.effort for p in message.points], 'via_points')
-        request.parsed = parse_via(joints, message.joint_names, points)
-    except RequestError as error:
-        answers.refused(request, str(error))
-        return None
-    return request
+#: A pose goal: its joint goal by inverse kinematics, then the pipeline as ``~/goal``.
+POSE = Planner(plan_pose)
+#: Each request subscription's message type: how its messages are read and planned.
+READERS = {JointState: (goal_request, PIPELINE), JointTrajectory: (via_request, PIPELINE),
+           PoseStamped: (pose_request, POSE)}

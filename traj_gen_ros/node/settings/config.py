@@ -18,6 +18,7 @@ import numpy as np
 from traj_gen_ros.core.timing import PROFILES  # the core's: the node offers every profile
 from traj_gen_ros.core.validation import per_joint
 from traj_gen_ros.node.description.joint_limits import JointLimits
+from traj_gen_ros.node.description.kinematics import RobotKinematics
 
 #: Jerk limit (rad/s³) when ``max_jerk`` is not given: the S-curve's.
 DEFAULT_MAX_JERK = 20.0
@@ -63,6 +64,8 @@ class Config:
     #: Targets of URDF continuous joints without position limits are reached the shortest
     #: way round (:mod:`traj_gen_ros.node.planning.continuous_joints`).
     angle_wraparound: bool = True
+    #: The kinematic chain in force, or why there is none (tool-frame requests).
+    kinematics: RobotKinematics = RobotKinematics()
 
     @property
     def profile_acceleration(self) -> np.ndarray:

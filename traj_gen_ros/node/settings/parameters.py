@@ -131,6 +131,18 @@ def descriptors(joint_count: int) -> dict[str, tuple[object, ParameterDescriptor
             description='URDF of the robot (XML); its joint limits apply. A message on the '
                         'robot_description topic replaces it; empty: none.',
             type=ParameterType.PARAMETER_STRING)),
+        'base_frame': ('', ParameterDescriptor(
+            description='Link whose frame tool poses are given in; empty: the URDF root '
+                        'link (read only).',
+            type=ParameterType.PARAMETER_STRING, read_only=True)),
+        'tool_frame': ('', ParameterDescriptor(
+            description='Link whose pose pose goals set; empty: the end of the fixed joints '
+                        'below the last joint, where there is one (read only).',
+            type=ParameterType.PARAMETER_STRING, read_only=True)),
+        'publish_tool_pose': (True, ParameterDescriptor(
+            description="Publish the setpoint's tool pose on ~/tool_pose at the stream rate "
+                        'while a kinematic chain is in force (read only).',
+            type=ParameterType.PARAMETER_BOOL, read_only=True)),
         'joint_topic': ('', ParameterDescriptor(
             description='Measured joint state in (sensor_msgs/JointState, e.g. /joint_states '
                         'of a joint_state_broadcaster): the first message is the start, the '

@@ -1,0 +1,295 @@
+"""
+The kinematic chain from ``base_frame`` to ``tool_frame`` of a URDF, for a set of joints.
+
+:meth:`Chain.from_urdf` chooses and checks the chain (:mod:`.urdf_tree`, lxml), then has
+Pinocchio build the model (:mod:`.pinocchio_model`); the chain then gives forward
+kinematics (:meth:`Chain.forward`, :meth:`Chain.frame_pose`), the Jacobian
+(:meth:`Chain.jacobian`) and inverse kinematics (:meth:`Chain.inverse`, :mod:`.inverse`).
+
+Units: rad (m for prismatic joints) per joint, in the order of ``joints``; poses are
+``(4, 4)`` homogeneous transforms in ``base_frame``, metres. Defaults: ``base_frame`` the
+URDF's root link; ``tool_frame`` the end of the fixed joints below the child link of the
+last joint (:meth:`.UrdfTree.fixed_end`). A chain keeps one Pinocchio ``Data``: it is not
+thread-safe; give each thread its own :meth:`Chain.copy`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from traj_gen_ros.core.kinematics.configuration import Configuration
+from traj_gen_ros.core.kinematics.inverse import IkSolution, solve
+from traj_gen_ros.core.kinematics.pinocchio_model import build_model
+from traj_gen_ros.core.kinematics.urdf_tree import listing, SCALAR_TYPES, UrdfTree
+
+
+def _check_joints(tree: UrdfTree, joints: Sequence[str]) -> tuple[str, ...]:
+    if not isinstance(joints, str):
+        joints = tuple(joints)
+    if isinstance(joints, str) or not all(isinstance(name, str) for name in joints):
+        raise ValueError(f'joints must be a sequence of joint names, not {joints!r}')
+    movable = [joint.name for joint in tree.joints.values()
+               if joint.type in SCALAR_TYPES and joint.mimic is None]
+    if not joints:
+        raise ValueError(f"joints is empty; the URDF's movable joints are {listing(movable)}")
+    twice = sorted({name for name in joints if joints.count(name) > 1})
+    if twice:
+        raise ValueError(f'joints names {listing(twice)} more than once')
+    for name in joints:
+        joint = tree.joints.get(name)
+        if joint is None:
+            raise ValueError(f'unknown joint {name!r}: the URDF has no such joint; its '
+                             f'movable joints are {listing(movable)}')
+        if joint.type not in SCALAR_TYPES:
+            raise ValueError(f'joint {name!r} is a {joint.type} joint: a chain moves only '
+                             f'revolute, continuous and prismatic joints')
+        if joint.mimic is not None:
+            raise ValueError(f'joint {name!r} mimics {joint.mimic.leader!r}: it follows its '
+                             'leader and cannot be one of the joints')
+    return joints
+
+
+def _frozen(values: Any) -> np.ndarray:
+    array = np.array(values)
+    array.setflags(write=False)
+    return array
+
+
+class Chain:
+    """
+    Forward and inverse kinematics of one chain; build it with :meth:`from_urdf`.
+
+    :ivar joints: the joint names, in the order of every ``q``.
+    :ivar base_frame: the link whose frame poses are expressed in.
+    :ivar tool_frame: the link whose pose :meth:`forward` gives.
+    :ivar links: every link of the URDF (any can be a :meth:`frame_pose`).
+    :ivar lower: the URDF's lower position limits, ``(joints,)``, rad or m (-inf: none).
+    :ivar upper: the URDF's upper position limits, likewise (+inf: none).
+    :ivar angular: per joint, True for revolute and continuous joints (rad), False for
+        prismatic ones (m).
+    :ivar periodic: per joint, True where a whole turn is the same pose of every link
+        (revolute and continuous joints that no other joint mimics).
+    """
+
+    def __init__(self, pin: Any, model: Any, tree: UrdfTree, joints: tuple[str, ...],
+                 base_frame: str, tool_frame: str, on_path: tuple[str, ...]) -> None:
+        """Wrap a built model; use :meth:`from_urdf`."""
+        self._pin, self._model, self._tree = pin, model, tree
+        self._data = model.createData()
+        self.joints, self.base_frame, self.tool_frame = joints, base_frame, tool_frame
+        self.links = tree.links
+        self._on_path = on_path
+        self._configuration = Configuration(pin, model, tree, joints)
+        self.lower, self.upper, self.angular, self.periodic = (_frozen(array) for array in (
+            [tree.joints[name].lower for name in joints],
+            [tree.joints[name].upper for name in joints],
+            [tree.joints[name].type != 'prismatic' for name in joints],
+            self._configuration.periodic))
+        self._frames = {link: model.getFrameId(link, pin.FrameType.BODY) for link in tree.links}
+        self._tool, self._base = self._frames[tool_frame], self._frames[base_frame]
+        self._base_is_world = base_frame == tree.root
+        up, _ = tree.path(base_frame, tool_frame)
+        moving = set(joints).union(*(tree.followers(name) for name in joints))
+        self._base_moves = any(joint.name in moving for joint in up)
+        self._world_aligned = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+    @classmethod
+    def from_urdf(cls, urdf_text: str | bytes, joints: Sequence[str],
+                  base_frame: str | None = None,
+                  tool_frame: str | None = None,
+                  held: Mapping[str, float] | None = None) -> Chain:
+        """
+        Build the chain from ``base_frame`` to ``tool_frame`` that ``joints`` move.
+
+        :param urdf_text: the URDF document (the ``robot_description``; bytes are read as
+            UTF-8).
+        :param joints: the joint names, in the order of every ``q``; each a revolute,
+            continuous or prismatic joint of the URDF that mimics none.
+        :param base_frame: a link; None (or '', an unset string parameter): the URDF's
+            root link.
+        :param tool_frame: a link; None (or ''): the end of the fixed joints below the
+            child link of ``joints[-1]`` where there is one end, else that child link.
+        :param held: positions (rad or m) of other joints, by name (:meth:`hold`).
+        :raises ValueError: the URDF is not valid or Pinocchio cannot read it; a joint
+            unknown, not movable, a mimic joint or named twice; an unknown link (the
+            message lists the links); a chain that does not contain every joint (the
+            message names the missing ones and the joints the chain has).
+        :raises ImportError: Pinocchio is not installed.
+        """
+        if isinstance(urdf_text, bytes):
+            urdf_text = urdf_text.decode('utf-8', errors='replace')
+        tree = UrdfTree.parse(urdf_text)
+        joints = _check_joints(tree, joints)
+        base = tree.root if not base_frame else tree.check_link(base_frame, 'base_frame')
+        if not tool_frame:
+            tool = tree.fixed_end(tree.joints[joints[-1]].child)
+        else:
+            tool = tree.check_link(tool_frame, 'tool_frame')
+        up, down = tree.path(base, tool)
+        on_path = tuple(joint.name for joint in (*up, *down))
+        missing = [name for name in joints if name not in on_path
+                   and not set(tree.followers(name)) & set(on_path)]
+        if missing:
+            moving = [name for name in on_path if tree.joints[name].type != 'fixed']
+            has = f'its joints are {listing(moving)}' if moving else 'it has no moving joint'
+            raise ValueError(f'the chain from {base!r} to {tool!r} does not contain joint(s) '
+                             f'{listing(missing)} of joints ({has}): choose a base_frame '
+                             'above and a tool_frame below every joint')
+        pin, model = build_model(urdf_text)
+        chain = cls(pin, model, tree, joints, base, tool, on_path)
+        if held:
+            chain.hold(held)
+        return chain
+
+    def copy(self) -> Chain:
+        """Return the same chain with its own Pinocchio ``Data`` (for another thread)."""
+        twin = Chain(self._pin, self._model, self._tree, self.joints, self.base_frame,
+                     self.tool_frame, self._on_path)
+        twin.hold(self.held)
+        return twin
+
+    def hold(self, values: Mapping[str, float]) -> None:
+        """
+        Hold joints that are not the chain's at ``values`` (rad or m, by name).
+
+        A name that is no revolute, continuous or prismatic joint of the URDF, the chain's
+        own joints and mimic joints (they follow their leaders) are ignored; a joint not
+        named keeps its value (at first 0). Floating and planar joints stay at the identity.
+
+        :raises ValueError: a value is not a finite number.
+        """
+        self._configuration.hold(values)
+
+    @property
+    def held(self) -> dict[str, float]:
+        """Return the positions of every other movable joint, by name (rad or m)."""
+        return self._configuration.held
+
+    def describe(self) -> str:
+        """Return one line naming the chain: base → tool, the joints, the others on the way."""
+        text = (f'kinematic chain {self.base_frame} -> {self.tool_frame}: '
+                f'{len(self.joints)} joints {", ".join(self.joints)}')
+        moving = [name for name in self._on_path if name not in self.joints
+                  and self._tree.joints[name].type != 'fixed']
+        leaders = {name: self._tree.mimic_root(name)[0] for name in moving
+                   if self._tree.joints[name].mimic is not None}
+        following = [f'{name} mimics {leader}' for name, leader in leaders.items()
+                     if leader in self.joints]
+        values = self.held
+        held = [f'{name}={values[name]:g}' if name in values else f'{name} (neutral)'
+                for name in moving if leaders.get(name) not in self.joints]
+        if following:
+            text += '; ' + ', '.join(following)
+        if held:
+            text += '; held on the way: ' + ', '.join(held)
+        return text
+
+    def _values(self, q: Sequence[float] | np.ndarray, what: str = 'q') -> np.ndarray:
+        try:
+            array = np.asarray(q, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f'{what} must be numbers, one per joint') from None
+        if array.ndim not in (1, 2) or array.shape[-1] != len(self.joints):
+            raise ValueError(f'{what} has shape {array.shape}: expected ({len(self.joints)},) '
+                             f'or (samples, {len(self.joints)}), one value per joint of '
+                             f'{", ".join(self.joints)}')
+        bad = ~np.isfinite(array)
+        if bad.any():
+            index = np.argwhere(bad)[0]
+            raise ValueError(f'{what} of joint {self.joints[index[-1]]!r} is '
+                             f'{array[tuple(index)]}: every position must be finite')
+        return array
+
+    def _placement(self, config: np.ndarray, frame: int) -> Any:
+        """Return Pinocchio's SE3 of ``frame`` in ``base_frame`` at one configuration."""
+        pin = self._pin
+        pin.forwardKinematics(self._model, self._data, config)
+        placement = pin.updateFramePlacement(self._model, self._data, frame)
+        if self._base_is_world:
+            return placement
+        return pin.updateFramePlacement(self._model, self._data, self._base).actInv(placement)
+
+    def _poses(self, config: np.ndarray, frame: int) -> np.ndarray:
+        if config.ndim == 1:
+            return self._placement(config, frame).homogeneous
+        return np.array([self._placement(row, frame).homogeneous for row in config])
+
+    def forward(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
+        """
+        Return the pose of ``tool_frame`` in ``base_frame`` at joint positions ``q``.
+
+        :param q: ``(joints,)`` or ``(samples, joints)``, rad or m.
+        :return: ``(4, 4)`` (or ``(samples, 4, 4)``) homogeneous transform(s), metres.
+        """
+        return self._poses(self._configuration.config(self._values(q)), self._tool)
+
+    def frame_pose(self, link: str, q: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Return the pose of any ``link`` in ``base_frame`` at ``q``, as :meth:`forward`."""
+        frame = self._frames.get(link)
+        if frame is None:
+            self._tree.check_link(link, 'link')
+        return self._poses(self._configuration.config(self._values(q)), frame)
+
+    def _pose_and_jacobian(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return ``(R, p, J)`` of the tool in ``base_frame`` at ``(joints,)`` positions."""
+        pin, model, data = self._pin, self._model, self._data
+        config = self._configuration.config(q)
+        pin.computeJointJacobians(model, data, config)
+        tool = pin.updateFramePlacement(model, data, self._tool)
+        jacobian = pin.getFrameJacobian(model, data, self._tool, self._world_aligned)
+        jacobian = jacobian @ self._configuration.selection
+        if self._base_is_world:
+            return tool.rotation, tool.translation, jacobian
+        base = pin.updateFramePlacement(model, data, self._base)
+        rotation_t = base.rotation.T
+        if self._base_moves:
+            of_base = pin.getFrameJacobian(model, data, self._base, self._world_aligned)
+            of_base = of_base @ self._configuration.selection
+            lever = tool.translation - base.translation
+            jacobian = jacobian - of_base
+            jacobian[:3] += np.cross(lever, of_base[3:], axisb=0, axisc=0)
+        relative = base.actInv(tool)
+        return (relative.rotation, relative.translation,
+                np.vstack((rotation_t @ jacobian[:3], rotation_t @ jacobian[3:])))
+
+    def jacobian(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
+        """
+        Return the tool's Jacobian at ``(joints,)`` positions ``q``: ``(6, joints)``.
+
+        Rows: the velocity of the ``tool_frame`` origin (m/s), then its angular velocity
+        (rad/s), both relative to ``base_frame`` and in its axes, per unit joint velocity.
+        """
+        q = self._values(q)
+        if q.ndim != 1:
+            raise ValueError(f'q has shape {q.shape}: the Jacobian takes ({len(self.joints)},)')
+        return self._pose_and_jacobian(q)[2]
+
+    def _tool_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        placement = self._placement(self._configuration.config(q), self._tool)
+        return placement.rotation, placement.translation
+
+    def inverse(self, target: np.ndarray, seed: Sequence[float],
+                lower: Sequence[float] | None = None, upper: Sequence[float] | None = None,
+                *, position_tolerance: float = 1e-5,
+                orientation_tolerance: float = 1e-4) -> IkSolution:
+        """
+        Return the joint positions that put ``tool_frame`` at ``target``, nearest ``seed``.
+
+        See :func:`traj_gen_ros.core.kinematics.inverse.solve` for the method.
+
+        :param target: the tool pose in ``base_frame``, ``(4, 4)``, metres.
+        :param seed: ``(joints,)``, rad or m: where to start and what to stay near.
+        :param lower: lower position limits ``(joints,)``; None: :attr:`lower`.
+        :param upper: upper position limits ``(joints,)``; None: :attr:`upper`.
+        :param position_tolerance: m (default 0.01 mm).
+        :param orientation_tolerance: rad (default 0.1 mrad).
+        :raises UnreachablePoseError: no start converged within the limits (a ``ValueError``
+            saying how close it came and which joint limits stopped it).
+        :raises ValueError: an invalid target, seed or limits.
+        """
+        return solve(self, target, self._values(seed, 'seed'),
+                     self.lower if lower is None else lower,
+                     self.upper if upper is None else upper,
+                     position_tolerance, orientation_tolerance)

@@ -1,0 +1,268 @@
+"""
+The tree of a URDF robot description: links, joints and the path between two links.
+
+No Pinocchio here: lxml reads what choosing and checking a chain needs, before Pinocchio
+builds the model. Read, with urdfdom's meaning: each ``<link name>`` and each ``<joint>``
+directly under ``<robot>`` (``name``, ``type``, ``<parent link>``, ``<child link>``,
+``<limit lower upper>``, ``<mimic joint multiplier offset>``). Everything else (origins,
+axes, inertias, meshes) is left to Pinocchio, which reads it with urdfdom.
+
+Position limits: a ``revolute`` or ``prismatic`` joint's ``<limit>`` ``lower``/``upper``
+(default 0, as urdfdom); a ``continuous`` joint, and a joint without ``<limit>``, has none
+(±inf). Units: rad or m.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+import math
+import re
+
+from lxml import etree
+
+#: Joints that carry one scalar coordinate (rad or m), the ones a chain can move.
+SCALAR_TYPES = ('revolute', 'continuous', 'prismatic')
+TYPES = (*SCALAR_TYPES, 'fixed', 'floating', 'planar')
+#: How many link names a refusal lists.
+LISTED = 12
+_XML_DECLARATION = re.compile(r'^\s*<\?xml[^>]*\?>')
+
+
+@dataclass(frozen=True)
+class Mimic:
+    """``<mimic>``: this joint's value is ``multiplier * leader + offset`` (rad or m)."""
+
+    leader: str
+    multiplier: float
+    offset: float
+
+
+@dataclass(frozen=True)
+class TreeJoint:
+    """One ``<joint>``: its type, the links it joins, its position limits and mimic."""
+
+    name: str
+    type: str  # noqa: A003 - the URDF attribute's name
+    parent: str
+    child: str
+    lower: float
+    upper: float
+    mimic: Mimic | None
+
+
+def _one_line(text: object) -> str:
+    return ' '.join(str(text).split())
+
+
+def _number(element: etree._Element, attribute: str, default: float, where: str) -> float:
+    text = element.get(attribute)
+    if text is None:
+        return default
+    try:
+        return float(text)
+    except ValueError:
+        raise ValueError(f'invalid URDF: {where}: <{element.tag}> {attribute}={text!r} '
+                         'is not a number') from None
+
+
+def _link_of(element: etree._Element, tag: str, where: str) -> str:
+    found = element.find(tag)
+    if found is None or not found.get('link'):
+        raise ValueError(f'invalid URDF: {where} has no <{tag} link="...">')
+    return found.get('link')
+
+
+def _joint(element: etree._Element, number: int) -> TreeJoint:
+    name = element.get('name')
+    where = f'joint {name!r}' if name else f'joint number {number}'
+    if not name:
+        raise ValueError(f'invalid URDF: {where} has no name')
+    kind = element.get('type')
+    if kind not in TYPES:
+        raise ValueError(f'invalid URDF: {where} has type {kind!r}; the types are '
+                         f'{", ".join(TYPES)}')
+    lower, upper = -math.inf, math.inf
+    limit = element.find('limit')
+    if limit is not None and kind in ('revolute', 'prismatic'):
+        lower = _number(limit, 'lower', 0.0, where)
+        upper = _number(limit, 'upper', 0.0, where)
+        if not lower <= upper:
+            raise ValueError(f'invalid URDF: {where}: <limit> lower {lower:g} > upper '
+                             f'{upper:g}')
+    mimic = None
+    found = element.find('mimic')
+    if found is not None:
+        if not found.get('joint'):
+            raise ValueError(f'invalid URDF: {where}: <mimic> has no joint')
+        mimic = Mimic(found.get('joint'), _number(found, 'multiplier', 1.0, where),
+                      _number(found, 'offset', 0.0, where))
+    return TreeJoint(name, kind, _link_of(element, 'parent', where),
+                     _link_of(element, 'child', where), lower, upper, mimic)
+
+
+def listing(names: Iterable[str]) -> str:
+    """Return up to :data:`LISTED` names, quoted, and how many more."""
+    names = list(names)
+    shown = ', '.join(repr(name) for name in names[:LISTED])
+    return shown + (f' and {len(names) - LISTED} more' if len(names) > LISTED else '')
+
+
+class UrdfTree:
+    """
+    The links and joints of a URDF and how they connect (a tree with one root link).
+
+    :ivar links: every link's name, in document order.
+    :ivar joints: every joint by name, in document order.
+    :ivar root: the root link (the one link that is no joint's child).
+    """
+
+    def __init__(self, links: list[str], joints: dict[str, TreeJoint]) -> None:
+        """Connect ``links`` by ``joints``; refuse anything but a tree with one root."""
+        self.links = tuple(links)
+        self.joints = joints
+        known = set(links)
+        self._parent_joint: dict[str, TreeJoint] = {}
+        self._children: dict[str, list[TreeJoint]] = {link: [] for link in links}
+        for joint in joints.values():
+            for link in (joint.parent, joint.child):
+                if link not in known:
+                    raise ValueError(f'invalid URDF: joint {joint.name!r} names link '
+                                     f'{link!r}, which the URDF does not have')
+            if joint.child in self._parent_joint:
+                raise ValueError(f'invalid URDF: link {joint.child!r} is the child of two '
+                                 f'joints, {self._parent_joint[joint.child].name!r} and '
+                                 f'{joint.name!r}')
+            self._parent_joint[joint.child] = joint
+            self._children[joint.parent].append(joint)
+        roots = [link for link in links if link not in self._parent_joint]
+        if len(roots) != 1:
+            raise ValueError(f'invalid URDF: {len(roots)} root links ({listing(roots)}); a '
+                             'robot description is one tree of links')
+        self.root = roots[0]
+        for joint in joints.values():
+            if joint.mimic is not None and joint.mimic.leader not in joints:
+                raise ValueError(f'invalid URDF: joint {joint.name!r} mimics joint '
+                                 f'{joint.mimic.leader!r}, which the URDF does not have')
+        for joint in joints.values():
+            if joint.mimic is not None and joint.type in SCALAR_TYPES:
+                self.mimic_root(joint.name)  # refuses circles and non-scalar leaders
+
+    @classmethod
+    def parse(cls, urdf_text: str | bytes) -> UrdfTree:
+        """
+        Read the tree of a URDF document.
+
+        :raises ValueError: not well-formed XML, not a ``<robot>``, a link or joint
+            without a name or defined twice, a joint of an unknown type or without its
+            links, a limit or mimic value that is not a number, not one tree; one line
+            saying why.
+        """
+        if isinstance(urdf_text, str):
+            urdf_text = _XML_DECLARATION.sub('', urdf_text, count=1)
+        if not urdf_text.strip():
+            raise ValueError('invalid URDF: the robot description is empty')
+        try:
+            root = etree.fromstring(urdf_text, etree.XMLParser(resolve_entities=False,
+                                                               no_network=True))
+        except etree.XMLSyntaxError as error:
+            raise ValueError(f'invalid URDF: not well-formed XML: {_one_line(error)}') from None
+        if root.tag != 'robot':
+            raise ValueError(f'invalid URDF: the root element is <{root.tag}>, not <robot>')
+        links: list[str] = []
+        for number, element in enumerate(root.iterchildren('link'), start=1):
+            name = element.get('name')
+            if not name:
+                raise ValueError(f'invalid URDF: link number {number} has no name')
+            links.append(name)
+        if len(set(links)) != len(links):
+            twice = sorted({name for name in links if links.count(name) > 1})
+            raise ValueError(f'invalid URDF: link(s) {listing(twice)} defined twice')
+        joints: dict[str, TreeJoint] = {}
+        for number, element in enumerate(root.iterchildren('joint'), start=1):
+            joint = _joint(element, number)
+            if joint.name in joints:
+                raise ValueError(f'invalid URDF: joint {joint.name!r} defined twice')
+            joints[joint.name] = joint
+        return cls(links, joints)
+
+    def check_link(self, name: str, role: str) -> str:
+        """Return ``name`` if it is a link; else refuse, naming ``role`` and valid links."""
+        if name not in self._children:
+            raise ValueError(f'unknown {role} {name!r}: the URDF has no such link; its links '
+                             f'are {listing(self.links)}')
+        return name
+
+    def joints_to(self, link: str) -> list[TreeJoint]:
+        """Return the joints from the root down to ``link``, root first."""
+        joints = []
+        while link in self._parent_joint:
+            joint = self._parent_joint[link]
+            joints.append(joint)
+            link = joint.parent
+        return joints[::-1]
+
+    def path(self, base: str, tool: str) -> tuple[list[TreeJoint], list[TreeJoint]]:
+        """
+        Return the joints on the way from ``base`` to ``tool``.
+
+        :return: ``(up, down)``: the joints from ``base`` up to the last link the two
+            share, then from there down to ``tool``; ``up`` is empty when ``base`` is an
+            ancestor of ``tool`` (the usual chain).
+        """
+        to_base, to_tool = self.joints_to(base), self.joints_to(tool)
+        shared = 0
+        while (shared < min(len(to_base), len(to_tool))
+               and to_base[shared] is to_tool[shared]):
+            shared += 1
+        return to_base[shared:][::-1], to_tool[shared:]
+
+    def mimic_root(self, name: str) -> tuple[str, float, float]:
+        """
+        Return ``(leader, multiplier, offset)``: joint ``name`` as a function of a joint.
+
+        Follows ``<mimic>`` through leaders that mimic others to one that mimics none;
+        a joint that mimics none is ``(name, 1, 0)``.
+
+        :raises ValueError: mimic joints that follow each other in a circle, or a leader
+            that is not a revolute, continuous or prismatic joint.
+        """
+        multiplier, offset, seen = 1.0, 0.0, [name]
+        mimic = self.joints[name].mimic
+        while mimic is not None:
+            offset += multiplier * mimic.offset
+            multiplier *= mimic.multiplier
+            name = mimic.leader
+            if name in seen:
+                raise ValueError(f'invalid URDF: the mimic joints {", ".join(seen)} follow '
+                                 'each other in a circle')
+            seen.append(name)
+            if self.joints[name].type not in SCALAR_TYPES:
+                raise ValueError(f'invalid URDF: joint {seen[-2]!r} mimics {name!r}, a '
+                                 f'{self.joints[name].type} joint')
+            mimic = self.joints[name].mimic
+        return name, multiplier, offset
+
+    def followers(self, leader: str) -> list[str]:
+        """Return the joints that follow ``leader`` (directly or through other mimics)."""
+        return [name for name, joint in self.joints.items()
+                if joint.mimic is not None and joint.type in SCALAR_TYPES
+                and self.mimic_root(name)[0] == leader]
+
+    def fixed_end(self, link: str) -> str:
+        """
+        Return the end of the fixed joints below ``link``, if there is only one; else ``link``.
+
+        Follows ``fixed`` joints only from ``link``; a link reached so with no ``fixed``
+        child is an end. One end: that link (the Panda's ``panda_hand_tcp`` below
+        ``panda_link7``); several (UR's ``ee_link`` and ``tool0``) or none: ``link``.
+        """
+        ends, todo = [], [link]
+        while todo:
+            current = todo.pop()
+            fixed = [joint.child for joint in self._children[current] if joint.type == 'fixed']
+            if fixed:
+                todo.extend(fixed)
+            else:
+                ends.append(current)
+        return ends[0] if len(ends) == 1 else link

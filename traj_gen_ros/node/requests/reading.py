@@ -1,0 +1,115 @@
+"""
+Step 2 of a request, *read*: a serialised message into a :class:`Request`, or its refusal.
+
+``~/goal`` (``sensor_msgs/JointState``, its fields read off the CDR bytes), ``~/via_points``
+(``trajectory_msgs/JointTrajectory``, its point count read before it is built) and
+``~/pose_goal`` (``geometry_msgs/PoseStamped``). A malformed request is answered ERROR at
+once and changes nothing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from geometry_msgs.msg import PoseStamped
+from rclpy.serialization import deserialize_message
+from sensor_msgs.msg import JointState
+from traj_gen_ros.core.kinematics import pose_matrix
+from traj_gen_ros.node.messages.parsing import (
+    check_no_effort,
+    MAX_VIA_POINTS,
+    parse_goal,
+    parse_via,
+    RequestError,
+    seconds,
+    too_many_points,
+)
+from traj_gen_ros.node.messages.wire import peek_via_points, read_goal
+from traj_gen_ros.node.planning.pose_goal import PoseRequest
+from traj_gen_ros.node.requests.answers import Answers
+from traj_gen_ros.node.requests.request import Request
+from trajectory_msgs.msg import JointTrajectory
+
+
+def goal_request(data: bytes, received: int, joints: Sequence[str],
+                 answers: Answers) -> Request | None:
+    """
+    Read a serialised goal into a :class:`Request`, or refuse it (ERROR) and return ``None``.
+
+    ``received`` (ns, system clock) goes into its answers; ``joints`` is the joint set.
+    """
+    fields = read_goal(data)
+    if fields is None:  # not the usual little-endian CDR: let rclpy read it
+        try:
+            message = deserialize_message(data, JointState)
+        except Exception as error:  # noqa: BLE001 - wire bytes must never kill the node
+            answers.refused(Request('goal', answers.values('goal', '', received), 0, None),
+                            f'malformed message: {error}')
+            return None
+        fields = message.header.frame_id, message.name, message.position
+    frame_id, names, positions = fields
+    request = Request('goal', answers.values('goal', frame_id, received), 0, None)
+    try:
+        request.parsed = parse_goal(joints, names, positions)
+    except RequestError as error:
+        answers.refused(request, str(error))
+        return None
+    return request
+
+
+def via_request(data: bytes, received: int, joints: Sequence[str],
+                answers: Answers) -> Request | None:
+    """:func:`goal_request` for a serialised ``JointTrajectory``; a huge one is not built."""
+    frame_id, count = peek_via_points(data)
+    values = answers.values('via_points', frame_id, received)
+    if count > MAX_VIA_POINTS:  # refused before one Python object per point is made
+        answers.refused(Request('via_points', values, 0, None), too_many_points(count))
+        return None
+    try:
+        message = deserialize_message(data, JointTrajectory)
+    except Exception as error:  # noqa: BLE001 - bytes from the wire must never kill the node
+        answers.refused(Request('via_points', values, 0, None), f'malformed message: {error}')
+        return None
+    stamp = message.header.stamp
+    stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec  # 0 or past: "now"
+    request = Request('via_points', values, stamp_ns, None)
+    points = [(p.positions, p.velocities, p.accelerations, seconds(p.time_from_start))
+              for p in message.points]
+    try:
+        check_no_effort([p.effort for p in message.points], 'via_points')
+        request.parsed = parse_via(joints, message.joint_names, points)
+    except RequestError as error:
+        answers.refused(request, str(error))
+        return None
+    return request
+
+
+def pose_request(data: bytes, received: int, joints: Sequence[str],
+                 answers: Answers) -> Request | None:
+    """
+    :func:`goal_request` for a serialised ``PoseStamped``: the tool pose to reach.
+
+    Its quaternion must have norm 1 within 1e-3 (then it is normalised); what the pose is
+    relative to (``header.frame_id``) is resolved when it is planned
+    (:mod:`traj_gen_ros.node.planning.pose_goal`).
+    """
+    del joints  # every joint of the chain moves
+    try:
+        message = deserialize_message(data, PoseStamped)
+    except Exception as error:  # noqa: BLE001 - bytes from the wire must never kill the node
+        answers.refused(Request('pose_goal', answers.values('pose_goal', '', received), 0,
+                                None), f'malformed message: {error}')
+        return None
+    frame_id = message.header.frame_id
+    values = answers.values('pose_goal', frame_id, received)
+    stamp = message.header.stamp
+    request = Request('pose_goal', values, stamp.sec * 1_000_000_000 + stamp.nanosec, None)
+    position, orientation = message.pose.position, message.pose.orientation
+    try:
+        pose = pose_matrix([position.x, position.y, position.z],
+                           [orientation.x, orientation.y, orientation.z, orientation.w])
+    except ValueError as error:
+        answers.refused(request, f'pose: {error}')
+        return None
+    request.parsed = PoseRequest(frame_id, pose, values)
+    return request
