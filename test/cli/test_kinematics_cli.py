@@ -326,3 +326,41 @@ def test_the_pose_words_become_a_position_and_a_unit_quaternion(orientation, deg
     assert position == pytest.approx([0.4, -0.1, 0.3])
     assert quaternion == pytest.approx(expected, abs=1e-12)
     assert np.linalg.norm(quaternion) == pytest.approx(1.0, abs=1e-15)
+
+
+# ---------------------------------------------------------------- help, imports, packages
+
+
+@pytest.mark.parametrize('command', ['fk', 'ik', 'pose'])
+def test_the_kinematics_subcommands_have_help_with_examples(command):
+    text = ok(command, '--help')
+    assert f'usage: traj-gen {command}' in text
+    assert 'examples:' in text and f'traj-gen {command} ' in text
+
+
+def test_fk_and_ik_import_no_ros_and_the_other_commands_no_kinematics(swing):
+    script = (
+        'import sys\n'
+        'from traj_gen_ros.cli import main as cli\n'
+        f'assert cli.main({["solve", "cubic", "--points", "0", "1", "--duration", "1"]!r}) == 0\n'
+        "assert not [m for m in sys.modules if m.startswith(('lxml', 'pinocchio', "
+        "'traj_gen_ros.core.kinematics'))]\n"
+        f'assert cli.main({["fk", "--urdf", swing, "0.1,0.2"]!r}) == 0\n'
+        f'assert cli.main({["ik", "--urdf", swing, "0.6", "0", "0"]!r}) == 0\n'
+        "loaded = [m for m in sys.modules if m.startswith(('rclpy', 'rcl_', 'geometry_msgs'))]\n"
+        'assert not loaded, loaded\n')
+    result = subprocess.run([sys.executable, '-c', script], cwd=REPO, env=env(),
+                            capture_output=True, text=True, timeout=TIMEOUT)
+    assert result.returncode == 0, result.stderr
+
+
+def test_fk_without_pinocchio_says_what_to_install_and_exits_2(swing):
+    script = ('import sys\n'
+              "sys.modules['pinocchio'] = None\n"
+              'from traj_gen_ros.cli.main import main\n'
+              'sys.exit(main(sys.argv[1:]))\n')
+    result = subprocess.run([sys.executable, '-c', script, 'fk', '--urdf', swing], cwd=REPO,
+                            env=env(), capture_output=True, text=True, timeout=TIMEOUT)
+    line = assert_one_line_error(result, code=2)
+    assert line.startswith('traj-gen fk: error: kinematics needs Pinocchio: pip install '
+                           'pin==4.1.0'), line

@@ -149,7 +149,7 @@ def _number(text: str, what: str) -> float:
 
 
 def _round(values: object) -> object:
-    return np.round(np.asarray(values, dtype=float), 12).tolist()
+    return (np.round(np.asarray(values, dtype=float), 12) + 0.0).tolist()  # no -0.0
 
 
 def describe_pose(pose: np.ndarray, degrees: bool) -> dict:
@@ -169,8 +169,8 @@ def joint_rows(chain: Chain, q: np.ndarray, degrees: bool,
         unit = ('deg' if degrees else 'rad') if chain.angular[k] else 'm'
         row = {'name': name, 'unit': unit}
         if seed is not None:
-            row['seed'] = round(float(seed[k] / scales[k]), 12)
-        row.update(value=round(float(q[k] / scales[k]), 12),
+            row['seed'] = _round(seed[k] / scales[k])
+        row.update(value=_round(q[k] / scales[k]),
                    lower=_limit(chain.lower[k], scales[k]),
                    upper=_limit(chain.upper[k], scales[k]),
                    within_limits=bool(chain.lower[k] <= q[k] <= chain.upper[k]))
@@ -179,7 +179,7 @@ def joint_rows(chain: Chain, q: np.ndarray, degrees: bool,
 
 
 def _limit(value: float, scale: float) -> float | None:
-    return round(float(value / scale), 12) if math.isfinite(value) else None
+    return _round(value / scale) if math.isfinite(value) else None
 
 
 def _cell(value: float | None) -> str:
