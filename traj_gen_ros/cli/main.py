@@ -1,7 +1,8 @@
 """
 The ``traj-gen`` command: plan, print and plot Craig ch. 7 trajectories from a shell.
 
-``solve`` and ``plot`` run the ROS-free core solver; ``goal``, ``via`` and
+``solve`` and ``plot`` run the ROS-free core solver, ``fk`` and ``ik`` its kinematics of a
+URDF file (:mod:`traj_gen_ros.cli.kinematics`); ``goal``, ``via``, ``pose`` and
 ``plot --topic`` talk to a running generator node (:mod:`traj_gen_ros.cli.ros`, which
 imports rclpy only when one of them runs).
 
@@ -10,12 +11,13 @@ written with commas (``--points 0,0 1,2 0.5,-1``). Per-joint values (acceleratio
 boundary velocities) are one number for all joints or a comma list, one per joint.
 ``--durations`` (alias ``--duration``) gives one duration per segment. Joints are named
 joint_1, joint_2, … in the order of a point's values (as the node's default joints); points
-keep Craig's names from 1 (t1, θ̇12, t12).
+keep Craig's names from 1 (t1, θ̇12, t12). fk and ik name them as the URDF does.
 
 Exit codes: 0 success, 1 not accepted by the node (its answer, with the reason, on stdout
-as an acceptance is), 2 bad arguments, a plan the solver refuses or a missing package
-(matplotlib for ``plot``), 3 no answer from ROS in time, 4 an internal error (a bug: please
-report it). Errors of traj-gen itself are one line on stderr.
+as an acceptance is), 2 bad arguments, a plan the solver refuses, a pose ik cannot reach
+or a missing package (matplotlib for ``plot``, Pinocchio for ``fk``/``ik``), 3 no answer
+from ROS in time, 4 an internal error (a bug: please report it). Errors of traj-gen itself
+are one line on stderr.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ from traj_gen_ros.cli.common import (  # shared with cli_ros, which must not imp
     report_plot,
     UsageError,
 )
+from traj_gen_ros.cli.kinematics_args import add_kinematics_parsers, add_pose_parser
 from traj_gen_ros.cli.plan import make_plan, Plan
 from traj_gen_ros.cli.report import describe, format_text
 
@@ -191,6 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument('--timeout', type=float, default=10.0, metavar='S',
                       help='--topic: seconds to wait for a message (default 10)')
 
+    add_kinematics_parsers(commands)
     goal = commands.add_parser(
         'goal', help='send a goal to a running generator node',
         description='Publish a sensor_msgs/JointState goal to NODE/goal, wait for the '
@@ -216,11 +220,13 @@ def build_parser() -> argparse.ArgumentParser:
                      metavar='Q', dest='points',
                      help='one position per joint, then @T (seconds from the start)')
     add_ros_arguments(via)
+    add_pose_parser(commands, add_ros_arguments)
     return parser
 
 
-def add_ros_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add the options shared by ``goal`` and ``via``."""
+def add_ros_arguments(parser: argparse.ArgumentParser,
+                      degrees_help: str = 'positions in degrees (sent in radians)') -> None:
+    """Add the options shared by ``goal``, ``via`` and ``pose``."""
     parser.add_argument('--node', default='/trajectory_generator',
                         help='full name of the generator node (default /trajectory_generator)')
     parser.add_argument('--timeout', type=float, default=10.0, metavar='S',
@@ -230,8 +236,7 @@ def add_ros_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--joint-states', metavar='TOPIC',
                         help="--wait: the node's JointState topic (default: joint_states "
                              "in the node's namespace)")
-    parser.add_argument('--degrees', action='store_true',
-                        help='positions in degrees (sent in radians)')
+    parser.add_argument('--degrees', action='store_true', help=degrees_help)
     parser.add_argument('--json', action='store_true', help='print the status as JSON')
     parser.add_argument('--plot', metavar='FILE.png',
                         help="after acceptance, plot the node's plan of this request (its "
@@ -297,11 +302,17 @@ def _plot_title(plan: Plan) -> str:
 
 
 def run_ros(args: argparse.Namespace) -> int:
-    """``traj-gen goal`` / ``traj-gen via``: send a request to a running node."""
+    """``traj-gen goal`` / ``via`` / ``pose``: send a request to a running node."""
     if args.plot:
         require_plotting()  # before waiting for ROS: a missing matplotlib is said at once
     from traj_gen_ros.cli import ros as cli_ros
     return cli_ros.run_request(args)
+
+
+def run_kinematics(args: argparse.Namespace) -> int:
+    """``traj-gen fk`` / ``traj-gen ik``: kinematics of a URDF file, offline."""
+    from traj_gen_ros.cli import kinematics  # lxml and the core's kinematics: only for these
+    return kinematics.run_fk(args) if args.command == 'fk' else kinematics.run_ik(args)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -311,7 +322,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = parser.parse_args(argv)
         command = f'traj-gen {args.command}'
-        runner = {'solve': run_solve, 'plot': run_plot, 'goal': run_ros, 'via': run_ros}
+        runner = {'solve': run_solve, 'plot': run_plot, 'goal': run_ros, 'via': run_ros,
+                  'pose': run_ros, 'fk': run_kinematics, 'ik': run_kinematics}
         return runner[args.command](args)
     except UsageError as error:
         print(f'{error.prog or command}: error: {_one_line(error)}', file=sys.stderr)

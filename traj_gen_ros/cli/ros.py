@@ -1,14 +1,16 @@
 """
-ROS side of ``traj-gen``: send goals and via points to a running generator, record its plans.
+ROS side of ``traj-gen``: send goals, via points and poses to a generator, record its plans.
 
 :mod:`traj_gen_ros.cli.main` imports this module only when one of these commands runs, so the
 offline subcommands need no ROS at all.
 
 A status answers a request when it comes from the node (``name`` is its full name) after
-the request was published, its ``request`` value names the request's kind (``goal`` or
-``via_points``) and its ``frame_id`` value echoes the request's ``header.frame_id``, which
-``traj-gen`` sets to a token of its own (``traj-gen/<pid>/<random>``). A node that does not
-echo ``frame_id`` is matched on the kind alone.
+the request was published, its ``request`` value names the request's kind (``goal``,
+``via_points`` or ``pose_goal``) and its ``frame_id`` value echoes the request's
+``header.frame_id``: for a goal or via points a token of ``traj-gen``'s own
+(``traj-gen/<pid>/<random>``), for a pose goal its frame (``--frame``, which names what
+the pose is relative to). A node that does not echo ``frame_id`` is matched on the kind
+alone.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from traj_gen_ros.cli.common import (
     report_plot,
     UsageError,
 )
+from traj_gen_ros.cli.pose_goal import answered_joints, pose_message
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 if TYPE_CHECKING:  # matplotlib is imported only when a plot is made
@@ -171,8 +174,15 @@ def _status_dict(status: object) -> dict:
             'values': {pair.key: pair.value for pair in status.values}}
 
 
-def _request_message(args: argparse.Namespace) -> tuple[object, str, list[str], list[float]]:
-    """Build the request; return it, its kind, the named joints and their final targets."""
+def _request_message(args: argparse.Namespace
+                     ) -> tuple[object, str, list[str] | None, list[float] | None]:
+    """
+    Build the request; return it, its kind, the named joints and their final targets.
+
+    A pose goal names no joints: its targets are the joint values the node's answer gives.
+    """
+    if args.command == 'pose':
+        return pose_message(args), 'pose_goal', None, None
     token = f'traj-gen/{os.getpid()}/{secrets.token_hex(4)}'
     if args.command == 'goal':
         names, positions = goal_from_args(args.positions, args.degrees)
@@ -191,7 +201,7 @@ def _request_message(args: argparse.Namespace) -> tuple[object, str, list[str], 
 
 
 def run_request(args: argparse.Namespace) -> int:
-    """``traj-gen goal`` / ``traj-gen via``: publish, wait for the status, print it."""
+    """``traj-gen goal`` / ``via`` / ``pose``: publish, wait for the status, print it."""
     node = node_name(args.node)
     _check_timeout(args.timeout)
     message, kind, names, targets = _request_message(args)
@@ -268,12 +278,17 @@ def _stamp_ns(stamp: object) -> int:
     return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
-def _wait_for_end(session: _Session, states: list, status: dict, names: list[str],
-                  targets: list[float], timeout: float) -> None:
-    """Wait until the stream holds the named joints at their targets, all at rest."""
+def _wait_for_end(session: _Session, states: list, status: dict, names: list[str] | None,
+                  targets: list[float] | None, timeout: float) -> None:
+    """
+    Wait until the stream holds the named joints at their targets, all at rest.
+
+    ``names`` None (a pose goal): the joints of the stream that the answer's values name,
+    at those values (the joint goal the node's inverse kinematics chose).
+    """
     values = status['values']
     motion = float(values.get('duration', 0.0)) + float(values.get('start_delay', 0.0))
-    target = dict(zip(names, targets, strict=True))
+    target = None if names is None else dict(zip(names, targets, strict=True))
     seen = len(states)
 
     def ended() -> bool:
@@ -281,9 +296,10 @@ def _wait_for_end(session: _Session, states: list, status: dict, names: list[str
             return False
         state = states[-1]
         position = dict(zip(state.name, state.position, strict=False))
-        return (not any(abs(v) > 0.0 for v in state.velocity)
+        goal = target if target is not None else answered_joints(values, state.name)
+        return (bool(goal) and not any(abs(v) > 0.0 for v in state.velocity)
                 and all(abs(position.get(n, math.inf) - q) <= _AT_GOAL
-                        for n, q in target.items()))
+                        for n, q in goal.items()))
 
     session.wait(ended, motion + timeout, 'the motion did not end on the joint_states stream '
                  '(see --joint-states)')

@@ -13,6 +13,7 @@ from traj_gen_ros.core.kinematics.poses import (
     pose_matrix,
     pose_quaternion,
 )
+from traj_gen_ros.core.kinematics.urdf_tree import chain_joints
 
-__all__ = ['Chain', 'IkSolution', 'UnreachablePoseError', 'check_pose', 'pose_distance',
-           'pose_matrix', 'pose_quaternion']
+__all__ = ['Chain', 'IkSolution', 'UnreachablePoseError', 'chain_joints', 'check_pose',
+           'pose_distance', 'pose_matrix', 'pose_quaternion']

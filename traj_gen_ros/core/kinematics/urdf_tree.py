@@ -266,3 +266,91 @@ class UrdfTree:
             else:
                 ends.append(current)
         return ends[0] if len(ends) == 1 else link
+
+    def moving_branches(self, link: str) -> list[str]:
+        """
+        Return the child links of ``link`` that lead to motion, in document order.
+
+        A child counts when its joint, or a joint anywhere below it, is revolute,
+        continuous or prismatic (mimic joints included).
+        """
+        branches = []
+        for joint in self._children[link]:
+            todo = [joint]
+            while todo:
+                current = todo.pop()
+                if current.type in SCALAR_TYPES:
+                    branches.append(joint.child)
+                    break
+                todo.extend(self._children[current.child])
+        return branches
+
+    def arm_end(self, base: str) -> str:
+        """
+        Return the last link of the unbranched arm below ``base``.
+
+        From ``base`` down, as long as exactly one child leads to motion
+        (:meth:`moving_branches`), follow it; stop where none does (the end of the arm) or
+        several do (a gripper's fingers, a second arm). Panda: ``panda_hand``, where the
+        two fingers branch off; UR10: ``wrist_3_link``.
+        """
+        link = base
+        while True:
+            branches = self.moving_branches(link)
+            if len(branches) != 1:
+                return link
+            link = branches[0]
+
+    def chain_joints(self, base: str, tool: str) -> list[str]:
+        """
+        Return the joints that move ``tool`` relative to ``base``, from ``base`` on.
+
+        Each revolute, continuous or prismatic joint on :meth:`path`, in path order; a
+        mimic joint stands for its leader (:meth:`mimic_root`), and each joint is named
+        once. Fixed, floating and planar joints are left out.
+        """
+        up, down = self.path(base, tool)
+        names: list[str] = []
+        for joint in (*up, *down):
+            if joint.type in SCALAR_TYPES:
+                leader = self.mimic_root(joint.name)[0]
+                if leader not in names:
+                    names.append(leader)
+        return names
+
+
+def chain_joints(urdf_text: str | bytes, base_frame: str | None = None,
+                 tool_frame: str | None = None) -> tuple[str, ...]:
+    """
+    Return the joints of the chain from ``base_frame`` to ``tool_frame``, from the base on.
+
+    The ``joints`` a :meth:`~traj_gen_ros.core.kinematics.chain.Chain.from_urdf` of that
+    chain needs when nobody names them (``traj-gen fk``/``ik``): every revolute,
+    continuous or prismatic joint on the path, a mimic joint replaced by its leader
+    (:meth:`UrdfTree.chain_joints`).
+
+    :param base_frame: a link; None or '': the URDF's root link.
+    :param tool_frame: a link; None or '': the end of the unbranched arm below the base
+        (:meth:`UrdfTree.arm_end`: the Panda's ``panda_hand``, above its fingers); a
+        chain of these joints then takes the usual default tool (the Panda's
+        ``panda_hand_tcp`` or ``panda_grasptarget``).
+    :raises ValueError: an invalid URDF, an unknown link (listing the links), or a chain
+        with no revolute, continuous or prismatic joint (saying where the arm branches,
+        when that is why).
+    """
+    if isinstance(urdf_text, bytes):
+        urdf_text = urdf_text.decode('utf-8', errors='replace')
+    tree = UrdfTree.parse(urdf_text)
+    base = tree.root if not base_frame else tree.check_link(base_frame, 'base_frame')
+    tool = tree.arm_end(base) if not tool_frame else tree.check_link(tool_frame, 'tool_frame')
+    names = tree.chain_joints(base, tool)
+    if names:
+        return tuple(names)
+    if tool_frame:
+        raise ValueError(f'the chain from {base!r} to {tool!r} has no revolute, continuous '
+                         'or prismatic joint: choose a tool_frame below a moving joint')
+    branches = tree.moving_branches(tool)
+    where = (f'it branches at {tool!r} into {listing(branches)}' if branches
+             else f'no joint below {base!r} moves')
+    raise ValueError(f'no arm below {base!r} to take the joints from: {where}; name the '
+                     'tool_frame (or the joints)')
