@@ -102,6 +102,8 @@ def test_pose_publishes_the_pose_stamped_and_waits_for_the_answered_joint_goal(s
                     ik_position_error_mm='0.000100')
     # The stream: moving, then at rest off the goal, then at rest on it (--wait's end).
     names = ['joint_1', 'joint_2', 'joint_3', 'joint_4']
+    stand_in.spin_until(lambda: stand_in.states.get_subscription_count() > 0, process,
+                        'its joint_states subscription')
     for positions, velocities in (([0.25, -0.5, 1.125, 0.0], [0.1, 0.0, 0.0, 0.0]),
                                   ([0.25, -0.4, 1.125, 0.0], [0.0] * 4),
                                   ([0.25, -0.5, 1.125, 0.0], [0.0] * 4)):

@@ -11,11 +11,13 @@ import contextlib
 import json
 import math
 from pathlib import Path
+import subprocess
+import sys
 import tempfile
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
-from node_harness import Probe, running_node, stamp_ns
+from node_harness import node_env, Probe, REPO, running_node, stamp_ns
 import numpy as np
 from numpy_chain import NumpyChain, rpy_matrix, transform
 from pybullet_urdfs import pybullet_urdfs
@@ -191,3 +193,23 @@ def test_without_a_urdf_a_pose_goal_is_refused_saying_so():
         status = probe.pose_goal(np.eye(4))
         assert status.level == DiagnosticStatus.ERROR
         assert 'no robot description' in status.message, status.message
+
+
+def test_traj_gen_pose_moves_the_node_and_prints_its_answer(urdf):
+    """The CLI's ``pose`` against the real node: a 3 cm jog along the tool's z, --wait."""
+    chain = NumpyChain(urdf)
+    with session(urdf) as (_, probe):
+        start, here = tool_at_rest(probe, chain)
+        result = subprocess.run(
+            [sys.executable, '-m', 'traj_gen_ros.cli.main', 'pose', '0', '0', '0.03',
+             '--frame', TOOL, '--wait', '--timeout', '60'], cwd=REPO, env=node_env(),
+            capture_output=True, text=True, timeout=120)
+        assert result.returncode == 0, result.stderr
+        assert result.stdout.startswith('OK: accepted: profile=quintic'), result.stdout
+        jog = np.eye(4)
+        jog[2, 3] = 0.03
+        probe.spin_until(lambda: not np.array_equal(probe.position(), start), 10.0,
+                         'the motion in this process')
+        _, reached = tool_at_rest(probe, chain)
+        distance, angle = errors(reached, here @ jog)
+        assert distance < 1e-4 and angle < 1e-3, (distance, angle)
