@@ -20,8 +20,7 @@ on the plan clock of a :class:`~traj_gen_ros.node.speed.time_map.TimeMap`;
 ramps it toward a new factor from the next tick not yet published, every published tick
 fixes the ramp up to it, and a request is planned from the running plan's own state
 (:meth:`Stream.start_state`). A plan whose start state a factor change moved since it was
-planned is not spliced (the request is planned again). :meth:`Stream.plan_elapsed` tells
-how much plan time has passed (an action's feedback and goal-time check).
+planned is not spliced (the request is planned again).
 
 Late ticks (:mod:`traj_gen_ros.node.stream.clock`): the schedule and the ramp run on the
 stream clock, held back at a late tick so that the setpoint after a stall continues from
@@ -42,10 +41,10 @@ from collections.abc import Callable, Sequence
 import threading
 
 import numpy as np
-from traj_gen_ros.node.messages.wire import joint_names_cdr, joint_state_cdr
 from traj_gen_ros.node.planning.motion import held, PlannedMotion, State
 from traj_gen_ros.node.speed.time_map import TimeMap
 from traj_gen_ros.node.stream.clock import StreamClock
+from traj_gen_ros.node.stream.output import SetpointOutput
 from traj_gen_ros.node.stream.schedule import BEGINNING_NS, Schedule
 from traj_gen_ros.node.stream.ticker import Ticker
 
@@ -92,16 +91,12 @@ class Stream:
         self._time_map = time_map if time_map is not None else TimeMap(np.ones(1))
         self._schedule = Schedule(first, self._time_map)
         self._on_late = on_late
-        self._publish_factor = publish_factor
-        self._forwarded = -1.0  # the factor last forwarded
+        self._output = SetpointOutput(joint_names, publish, publish_command, publish_factor)
         # Per thread: the ramp's version and the hold-back that start_state saw.
         self._versions: dict[int, tuple[int, int]] = {}
         self._last_position = first.end.copy()  # the last setpoint published (rad)
-        self._names_cdr = joint_names_cdr(list(joint_names))
         self._now_ns = now_ns
         self._period_ns = period_ns
-        self._publish = publish
-        self._publish_command = publish_command
         self._on_error = on_error
         # Guards the schedule, the last published time and the next tick; notified when a
         # setpoint has been published.
@@ -210,19 +205,6 @@ class Stream:
         with self._lock:
             return self._schedule.factor_at(max(self._clock.at(self._last_published_ns), 0))
 
-    def plan_elapsed(self, start_ns: int, now_ns: int) -> float:
-        """
-        Plan time (s) a scaled motion started at ``start_ns`` has run by ``now_ns``.
-
-        ``∫ f dt`` from ``start_ns`` to ``now_ns`` (the node clock, ns): equal to
-        ``(now_ns - start_ns) · 1e-9`` at a factor of 1, less when slowed, constant while
-        paused. ``now_ns`` at or after the last published setpoint; ``start_ns`` too, or
-        a time since the last change of the factor asked for and the last late tick.
-        """
-        with self._lock:
-            return self._schedule.plan_elapsed(self._clock.at(start_ns),
-                                               self._clock.at(now_ns))
-
     def time_left(self, time_ns: int) -> float:
         """Return the plan time (s) left at ``time_ns`` (:meth:`Schedule.time_left`)."""
         with self._lock:
@@ -320,7 +302,7 @@ class Stream:
             state = self._schedule.setpoint(at)
             moving = self._schedule.moving_at(at)
             self._schedule.commit(at)
-            factor = self._schedule.factor_at(at) if self._publish_factor else 0.0
+            factor = self._schedule.factor_at(at) if self._output.wants_factor else 0.0
             position, velocity = state.position, state.velocity
             finite = np.count_nonzero(np.isfinite(position)) + \
                 np.count_nonzero(np.isfinite(velocity)) == 2 * position.size
@@ -332,13 +314,9 @@ class Stream:
             self._last_tick_ns = tick_ns
         if not finite:
             self._on_error('stream: the schedule gave a non-finite setpoint: holding')
-        self._publish(joint_state_cdr(now_ns, self._names_cdr, position, velocity))
+        self._output.joint_state(now_ns, position, velocity)
         try:
-            if self._publish_command is not None:
-                self._publish_command(position, velocity)
-            if self._publish_factor is not None and factor != self._forwarded:
-                self._forwarded = factor
-                self._publish_factor(factor)
+            self._output.command_and_factor(position, velocity, factor)
         finally:  # joint_states is out (a failure after it is logged by the ticker)
             with self._published:
                 self._sent_ns, self._sent_moving = now_ns, moving and finite
