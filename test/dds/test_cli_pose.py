@@ -11,6 +11,7 @@ import json
 import math
 import subprocess
 import sys
+import time
 
 from cli_helpers import assert_one_line_error
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
@@ -104,11 +105,17 @@ def test_pose_publishes_the_pose_stamped_and_waits_for_the_answered_joint_goal(s
     names = ['joint_1', 'joint_2', 'joint_3', 'joint_4']
     stand_in.spin_until(lambda: stand_in.states.get_subscription_count() > 0, process,
                         'its joint_states subscription')
-    for positions, velocities in (([0.25, -0.5, 1.125, 0.0], [0.1, 0.0, 0.0, 0.0]),
-                                  ([0.25, -0.4, 1.125, 0.0], [0.0] * 4),
-                                  ([0.25, -0.5, 1.125, 0.0], [0.0] * 4)):
+    stream = [([0.25, -0.5, 1.125, 0.0], [0.1, 0.0, 0.0, 0.0]),
+              ([0.25, -0.4, 1.125, 0.0], [0.0] * 4), ([0.25, -0.5, 1.125, 0.0], [0.0] * 4)]
+    for positions, velocities in stream:
         stand_in.states.publish(JointState(name=names, position=positions,
                                            velocity=velocities))
+
+    deadline = time.monotonic() + TIMEOUT
+    while process.poll() is None and time.monotonic() < deadline:  # as a node streams:
+        stand_in.states.publish(JointState(name=names, position=stream[-1][0],  # the last
+                                           velocity=stream[-1][1]))  # setpoint, again
+        stand_in.executor.spin_once(timeout_sec=0.05)
     result = stand_in.finish(process)
     assert result.returncode == 0, result.stderr
     assert result.stderr == ''
