@@ -1,16 +1,14 @@
 """
 ROS side of ``traj-gen``: send goals, via points and poses to a generator, record its plans.
 
-:mod:`traj_gen_ros.cli.main` imports this module only when one of these commands runs, so the
-offline subcommands need no ROS at all.
-
-A status answers a request when it comes from the node (``name`` is its full name) after
-the request was published, its ``request`` value names the request's kind (``goal``,
-``via_points`` or ``pose_goal``) and its ``frame_id`` value echoes the request's
-``header.frame_id``: for a goal or via points a token of ``traj-gen``'s own
-(``traj-gen/<pid>/<random>``), for a pose goal its frame (``--frame``, which names what
-the pose is relative to). A node that does not echo ``frame_id`` is matched on the kind
-alone.
+:mod:`traj_gen_ros.cli.main` imports this module only when one of these commands runs (the
+offline subcommands need no ROS). A status answers a request when it comes from the node
+(``name`` is its full name) after the request was published, its ``request`` value names
+the request's kind (``goal``, ``via_points`` or ``pose_goal``) and its ``frame_id`` value
+echoes the request's ``header.frame_id``: for a goal or via points a token of ``traj-
+gen``'s own (``traj-gen/<pid>/<random>``), for a pose goal its frame (``--frame``, which
+names what the pose is relative to). A node that does not echo ``frame_id`` is matched on
+the kind alone.
 """
 
 from __future__ import annotations
