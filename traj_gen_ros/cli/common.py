@@ -9,6 +9,7 @@ so the offline commands need no ROS).
 from __future__ import annotations
 
 import json
+import math
 
 EXIT_OK = 0
 EXIT_REFUSED = 1
@@ -28,6 +29,17 @@ class UsageError(Exception):
         """Keep ``message`` and the program (``traj-gen goal`` ...) it is about."""
         super().__init__(message)
         self.prog = prog
+
+
+def finite_number(text: str, what: str) -> float:
+    """Read a finite number from the command line; :class:`UsageError` naming ``what``."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise UsageError(f"{what}: '{text}' is not a number") from None
+    if not math.isfinite(value):
+        raise UsageError(f"{what}: '{text}' must be finite")
+    return value
 
 
 def joint_names(count: int) -> list[str]:

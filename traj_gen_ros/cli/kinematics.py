@@ -23,7 +23,7 @@ import math
 import sys
 
 import numpy as np
-from traj_gen_ros.cli.common import EXIT_OK, UsageError
+from traj_gen_ros.cli.common import EXIT_OK, finite_number, UsageError
 from traj_gen_ros.core.kinematics import (
     Chain,
     chain_joints,
@@ -127,7 +127,7 @@ def joint_values(words: Sequence[str] | None, chain: Chain, degrees: bool,
                 raise UsageError(f"{what}: '{name}' is not a joint of the chain; its joints "
                                  f'are {", ".join(chain.joints)}')
             index = chain.joints.index(name)
-            values[index] = _number(text, f'{what} {name}') * scales[index]
+            values[index] = finite_number(text, f'{what} {name}') * scales[index]
         return values
     if any(named):
         raise UsageError(f'{what}: give one value per joint or JOINT=VALUE words, not both')
@@ -135,17 +135,7 @@ def joint_values(words: Sequence[str] | None, chain: Chain, degrees: bool,
         raise UsageError(f'{what}: {len(words)} values for the {len(chain.joints)} joints '
                          f'{", ".join(chain.joints)}: give one per joint in this order, or '
                          'JOINT=VALUE words')
-    return np.array([_number(word, what) for word in words]) * scales
-
-
-def _number(text: str, what: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise UsageError(f"{what}: '{text}' is not a number") from None
-    if not math.isfinite(value):
-        raise UsageError(f"{what}: '{text}' must be finite")
-    return value
+    return np.array([finite_number(word, what) for word in words]) * scales
 
 
 def _round(values: object) -> object:

@@ -34,6 +34,7 @@ from sensor_msgs.msg import JointState
 from traj_gen_ros.cli.common import (
     EXIT_OK,
     EXIT_REFUSED,
+    finite_number,
     NoAnswerError,
     report_plot,
     UsageError,
@@ -69,16 +70,6 @@ def _check_timeout(timeout: float) -> None:
         raise UsageError('--timeout must be > 0 s')
 
 
-def _number(text: str, what: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise UsageError(f"{what}: '{text}' is not a number") from None
-    if not math.isfinite(value):
-        raise UsageError(f"{what}: '{text}' must be finite")
-    return value
-
-
 def goal_from_args(items: list[str], degrees: bool) -> tuple[list[str], list[float]]:
     """
     Read ``traj-gen goal``'s ``JOINT=POSITION`` words into names and positions (rad).
@@ -93,7 +84,7 @@ def goal_from_args(items: list[str], degrees: bool) -> tuple[list[str], list[flo
         if not sep or not name:
             raise UsageError(f"'{item}' is not JOINT=POSITION (e.g. joint_1=0.5)")
         names.append(name)
-        positions.append(_number(value, name) * scale)
+        positions.append(finite_number(value, name) * scale)
     return names, positions
 
 
@@ -112,11 +103,11 @@ def via_from_args(joints: list[str], points: list[list[str]],
         raise UsageError('give @T on every --point, or on none (the node then times them)')
     for index, group in enumerate(points):
         values = group[:-1] if timed[index] else group
-        when = _number(group[-1][1:], f'point {index} time') if timed[index] else 0.0
+        when = finite_number(group[-1][1:], f'point {index} time') if timed[index] else 0.0
         if len(values) != len(joints):
             raise UsageError(f'point {index} has {len(values)} positions for {len(joints)} '
                              f'joints ({" ".join(joints)})')
-        parsed.append(([_number(v, f'point {index}') * scale for v in values], when))
+        parsed.append(([finite_number(v, f'point {index}') * scale for v in values], when))
     return parsed
 
 
