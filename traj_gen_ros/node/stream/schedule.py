@@ -174,12 +174,6 @@ class Schedule:
         """Return the effective (ramped) factor ``f`` at ``time_ns``."""
         return self.time_map.at(time_ns, self._own_state)[1]
 
-    def plan_elapsed(self, start_ns: int, time_ns: int) -> float:
-        """Plan time (s) elapsed from node time ``start_ns`` to ``time_ns``: ``P(t) - P(s)``."""
-        time_map = self.time_map
-        return time_map.at(time_ns, self._own_state)[0] - \
-            time_map.at(start_ns, self._own_state)[0]
-
     def set_factor(self, factor: float, from_ns: int, defer_ns: int
                    ) -> list[tuple[PlannedMotion, object]]:
         """
