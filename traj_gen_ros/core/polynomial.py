@@ -175,6 +175,40 @@ def quintic_via(
     return _segments(QUINTIC_MATRIX, _QUINTIC_EXPONENTS, path[:-1], boundary, durations)
 
 
+def quintic_hermite(
+    breakpoints: np.ndarray,
+    positions: np.ndarray,
+    velocities: np.ndarray,
+    start_accelerations: np.ndarray,
+    end_accelerations: np.ndarray,
+) -> Trajectory:
+    """
+    One eq. (3) quintic per interval from the states at its two ends.
+
+    The building block of sampled paths (:mod:`traj_gen_ros.core.cartesian`): position
+    and velocity are shared by the intervals that meet at a breakpoint; the acceleration is
+    each interval's own at either end, so it may step there.
+
+    :param breakpoints: ``(n,)`` ascending, in the trajectory's time unit (s, or units of
+        path where the polynomial is in ``s``).
+    :param positions: ``(n, joints)`` at the breakpoints.
+    :param velocities: ``(n, joints)`` at the breakpoints.
+    :param start_accelerations: ``(n - 1, joints)``, each interval's at its start.
+    :param end_accelerations: ``(n - 1, joints)``, each interval's at its end.
+    """
+    breakpoints = np.asarray(breakpoints, dtype=float)
+    positions, velocities = np.asarray(positions, float), np.asarray(velocities, float)
+    boundary = np.stack([
+        np.zeros_like(positions[1:]), velocities[:-1], np.asarray(start_accelerations, float),
+        positions[1:] - positions[:-1], velocities[1:], np.asarray(end_accelerations, float),
+    ], axis=1)
+    trajectory = _segments(QUINTIC_MATRIX, _QUINTIC_EXPONENTS, positions[:-1], boundary,
+                           np.diff(breakpoints))
+    if breakpoints[0] != 0.0:
+        trajectory = Trajectory(breakpoints.copy(), trajectory.coefficients)
+    return trajectory
+
+
 def heuristic_velocities(
     path: np.ndarray, durations: np.ndarray, v0: np.ndarray | float = 0.0,
     resolution: float = 0.0,
