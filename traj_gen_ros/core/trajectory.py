@@ -91,7 +91,7 @@ class Trajectory:
         if self.breakpoints.ndim == 2 and not (dense and
                                                self.joint_count <= _JOINTS_FOR_MERGING):
             return self._sample_per_joint(times)
-        breakpoints, coefficients = self._shared_pieces
+        breakpoints, coefficients = self.shared_pieces
         if times.size < _SAMPLES_PER_PIECE_FOR_MATMUL * len(coefficients):
             piece = np.searchsorted(breakpoints[1:-1], times, side='right')
             local_time = (times - breakpoints[piece])[:, None]
@@ -211,7 +211,7 @@ class Trajectory:
         return states[0], states[1], states[2]
 
     @cached_property
-    def _shared_pieces(self) -> tuple[np.ndarray, np.ndarray]:
+    def shared_pieces(self) -> tuple[np.ndarray, np.ndarray]:
         """
         Give breakpoints shared by every joint, ``(pieces + 1,)``, with coefficients on them.
 
@@ -244,7 +244,7 @@ class Trajectory:
     @cached_property
     def _state_tables(self) -> np.ndarray:
         """Position, velocity, acceleration coefficients, ``(pieces, 3, n + 1, joints)``."""
-        coefficients = self._shared_pieces[1]
+        coefficients = self.shared_pieces[1]
         tables = np.zeros((len(coefficients), 3) + coefficients.shape[1:])
         series = coefficients
         for order in range(3):
@@ -254,7 +254,7 @@ class Trajectory:
 
     def _sample_sorted(self, times: np.ndarray) -> np.ndarray:
         """Evaluate ascending ``times`` piece by piece: ``(3, samples, joints)``."""
-        breakpoints = self._shared_pieces[0]
+        breakpoints = self.shared_pieces[0]
         states = np.zeros((3, times.size, self.joint_count))
         edges = np.searchsorted(times, breakpoints, side='left')
         edges[0], edges[-1] = 0, times.size
