@@ -60,8 +60,8 @@ class Rig:
     def tick(self, late=0):
         deadline = self.stream.next_start()
         self.clock[0] = deadline + late
-        self.stream._publish_tick(deadline)
-        self.stream._next_tick_ns = deadline + PERIOD
+        self.stream._ticks.tick(deadline)
+        self.stream._ticks.next_deadline(deadline + PERIOD)
         return deadline
 
     def state(self, index=-1):

@@ -20,8 +20,8 @@ def tick(stream, clock, late=0):
     """Publish the next tick of the grid, sampled ``late`` ns after its deadline."""
     deadline = stream.next_start()
     clock[0] = deadline + late
-    stream._publish_tick(deadline)
-    stream._next_tick_ns = deadline + PERIOD  # as the stream thread does after a tick
+    stream._ticks.tick(deadline)
+    stream._ticks.next_deadline(deadline + PERIOD)  # as the stream thread does after a tick
     return deadline
 
 

@@ -176,7 +176,7 @@ class TrajectoryGenerator(Node):
             self._request_thread.serve(self.follow_joint_trajectory.action_server)
             if self.feedback is not None:
                 self.feedback.add_listener(self.follow_joint_trajectory.monitor)
-        self.speed_scaling = SpeedScalingInput(self, self._stream, self._requests.dropped)
+        self.speed_scaling = SpeedScalingInput(self, self._stream.speed, self._requests.dropped)
         # Every party's parameter checks and changes, registered once the node is built.
         serve_parameters(self, [ParameterUse(self._check_config, self._apply_config),
                                 ParameterUse(self._limits.check),
@@ -187,7 +187,7 @@ class TrajectoryGenerator(Node):
         self._diagnostics = NodeDiagnostics(
             self, lambda: self._config, self._limits, self._answers, self._rate_meter,
             lambda: self._stream.setpoint(self._stream.last_published()).position,
-            self._status_with_speed(measured), self._stream.time_left)
+            self._status_with_speed(measured), self._stream.speed.time_left)
         self._diagnostics.check_ranges()  # a start outside the limits is said at once
         self._answers.trajectory(0, held(initial), self._config.rate_hz)  # warm up
         priority = self._stream.start()
@@ -276,8 +276,8 @@ class TrajectoryGenerator(Node):
     def _apply_config(self, parameters: list[Parameter]) -> None:
         """Rebuild the ``Config`` in force (after a change, or a new URDF on the topic)."""
         del parameters  # every change can change the limits in force: rebuilt whole
-        self._config = self._read_config()  # the stream reads the period every tick
-        self._stream.set_scaling_limits(self._config.max_acceleration, self._config.jerk_limit)
+        self._config = config = self._read_config()  # the stream reads the period every tick
+        self._stream.speed.set_scaling_limits(config.max_acceleration, config.jerk_limit)
 
     def destroy_node(self) -> None:
         """Stop the request and stream threads, send a last zero velocity command, destroy."""

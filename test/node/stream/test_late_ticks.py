@@ -57,8 +57,8 @@ class Rig:
     def tick(self, after=PERIOD, stalled=False):
         """Publish the next setpoint ``after`` ns after the last; return (stamp ns, q, v)."""
         self.wait(after, stalled)
-        self.stream._publish_tick(self.node[0])
-        self.stream._next_tick_ns = self.node[0] + PERIOD  # as the thread does after a tick
+        self.stream._ticks.tick(self.node[0])
+        self.stream._ticks.next_deadline(self.node[0] + PERIOD)  # as the thread does next
         message = deserialize_message(self.published[-1], JointState)
         return (message.header.stamp.sec * 10 ** 9 + message.header.stamp.nanosec,
                 np.array(message.position), np.array(message.velocity))
@@ -238,10 +238,10 @@ def test_the_speed_ramp_runs_on_the_held_back_clock():
     rig.start_motion(plan)
     samples = [rig.tick() for _ in range(20)]
     samples.append(rig.tick(after=STALL, stalled=True))
-    assert rig.stream.factor_in_force() == 1.0
-    assert rig.stream.set_factor(0.5) == []
+    assert rig.stream.speed.factor_in_force() == 1.0
+    assert rig.stream.speed.set_factor(0.5) == []
     samples += [rig.tick() for _ in range(40)]
-    assert rig.stream.factor_in_force() == 0.5
+    assert rig.stream.speed.factor_in_force() == 0.5
     stamps = np.array([s[0] for s in samples]) * 1e-9
     velocities = np.array([s[2] for s in samples])
     # Between consecutive setpoints the velocity changes within the acceleration limits

@@ -74,7 +74,7 @@ def test_a_failed_command_publish_still_marks_the_setpoint_sent():
     deadline = stream.next_start()
     clock[0] = deadline
     try:
-        stream._publish_tick(deadline)
+        stream._ticks.tick(deadline)
     except RuntimeError as error:
         assert 'command publisher gone' in str(error)  # the ticker logs it
     else:

@@ -118,8 +118,8 @@ class MotionLog:
         Say what runs at ``now_ns``: ``quintic, 1.234 s left`` or ``holding``.
 
         ``time_left(now_ns)``: the plan time left (s) on the plan clock (speed scaling:
-        :meth:`~traj_gen_ros.node.stream.stream.Stream.time_left`); None: duration − time since
-        its start.
+        :meth:`~traj_gen_ros.node.stream.speed_view.SpeedView.time_left`); None:
+        duration − time since its start.
         """
         started = [motion for motion in self._motions if motion[0] <= now_ns]
         text = 'holding'

@@ -30,7 +30,7 @@ def check_factor(value: object, name: str = 'speed_scaling') -> float:
 
 
 class FactorSink(Protocol):
-    """What the speed inputs drive: the stream's ramp toward a factor (``Stream``)."""
+    """What the speed inputs drive: the stream's ramp toward a factor (``SpeedView``)."""
 
     def set_factor(self, factor: float) -> list[tuple[object, object]]:
         """Ramp toward ``factor``; return the delayed motions dropped, with their tags."""

@@ -3,7 +3,7 @@ The speed override's ROS side: the ``speed_scaling`` parameter, ``~/speed_scalin
 
 The logic (the inputs, the ramp, the plan clock) is :mod:`traj_gen_ros.node.speed.time_map`;
 this module reads the inputs and hands their product to the stream
-(:meth:`traj_gen_ros.node.stream.stream.Stream.set_factor`):
+(:meth:`traj_gen_ros.node.stream.speed_view.SpeedView.set_factor`):
 
 * ``speed_scaling`` (double in [0, 1], run-time changeable): checked in the node's
   parameter callback (:meth:`SpeedScalingInput.check`: a value outside [0, 1] or not

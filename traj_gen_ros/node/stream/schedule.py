@@ -6,7 +6,7 @@ Times are integer nanoseconds of the node clock (system time, or ``/clock`` with
 on; until then the previous motion keeps running, so a delayed request (a future
 ``header.stamp``) does not interrupt the motion in progress. Once a plan's duration has
 passed, the setpoint is exactly its end, at rest. No ROS here; not thread-safe (the
-:class:`traj_gen_ros.node.stream.stream.Stream` lock guards it).
+:class:`traj_gen_ros.node.stream.state.StreamState` lock guards it).
 
 **Speed scaling** (:mod:`traj_gen_ros.node.speed.time_map`): a scaled motion's own time is
 ``τ(t) = P(t) - P(start)``, ``P`` the plan clock of the :class:`TimeMap`; its setpoint is

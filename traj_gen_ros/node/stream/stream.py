@@ -1,24 +1,24 @@
 """
 Steps 4 and 5, *splice* and *publish*: the setpoint every ``1/rate_hz`` s, in a thread.
 
-The :class:`Stream` owns the :class:`~traj_gen_ros.node.stream.schedule.Schedule` and the thread
-that
+The :class:`Stream` owns the :class:`~traj_gen_ros.node.stream.schedule.Schedule` (in a
+:class:`~traj_gen_ros.node.stream.state.StreamState`, under its lock) and the thread that
 samples it. Each tick has a deadline on a fixed grid of the node clock (absolute times, so
 a late wake-up does not shift the ticks after it); at the deadline the thread samples the
-schedule at the current time and publishes the ``JointState`` bytes. A new motion is
-planned from the schedule's state at a tick the stream has not published yet
-(:meth:`Stream.next_start`), or at the last setpoint it published
-(:meth:`Stream.last_published`), and spliced in there (:meth:`Stream.splice`) if the
-stream has published nothing after it. So every setpoint published is the old motion's
-before the switch or the new one's after it (the last published setpoint, exactly both),
-and position, velocity and acceleration are continuous at the switch.
+schedule at the current time and publishes the ``JointState`` bytes
+(:mod:`traj_gen_ros.node.stream.tick_publisher`). A new motion is planned from the
+schedule's state at a tick the stream has not published yet (:meth:`Stream.next_start`),
+or at the last setpoint it published (:meth:`Stream.last_published`), and spliced in
+there (:meth:`Stream.splice`) if the stream has published nothing after it. So every
+setpoint published is the old motion's before the switch or the new one's after it (the
+last published setpoint, exactly both), and position, velocity and acceleration are
+continuous at the switch.
 
 Speed scaling (:mod:`traj_gen_ros.node.speed.time_map`): the schedule's scaled motions
-run
-on the plan clock of a :class:`~traj_gen_ros.node.speed.time_map.TimeMap`;
-:meth:`Stream.set_factor`
-ramps it toward a new factor from the next tick not yet published, every published tick
-fixes the ramp up to it, and a request is planned from the running plan's own state
+run on the plan clock of a :class:`~traj_gen_ros.node.speed.time_map.TimeMap`;
+:attr:`Stream.speed` (:mod:`traj_gen_ros.node.stream.speed_view`) ramps it toward a new
+factor from the next tick not yet published, every published tick fixes the ramp up to
+it, and a request is planned from the running plan's own state
 (:meth:`Stream.start_state`). A plan whose start state a factor change moved since it was
 planned is not spliced (the request is planned again).
 
@@ -41,15 +41,14 @@ from collections.abc import Callable, Sequence
 import threading
 
 import numpy as np
-from traj_gen_ros.node.planning.motion import held, PlannedMotion, State
+from traj_gen_ros.node.planning.motion import PlannedMotion, State
 from traj_gen_ros.node.speed.time_map import TimeMap
 from traj_gen_ros.node.stream.clock import StreamClock
 from traj_gen_ros.node.stream.output import SetpointOutput
-from traj_gen_ros.node.stream.schedule import BEGINNING_NS, Schedule
+from traj_gen_ros.node.stream.speed_view import SpeedView
+from traj_gen_ros.node.stream.state import StreamState
+from traj_gen_ros.node.stream.tick_publisher import TickPublisher
 from traj_gen_ros.node.stream.ticker import Ticker
-
-#: A factor change waits for a motion spliced to start within this long (ns).
-FACTOR_DEFER_NS = 500_000_000
 
 
 class Stream:
@@ -88,53 +87,37 @@ class Stream:
         :param simulated: whether the node clock is a simulated one (``/clock``) now;
             None: never.
         """
-        self._time_map = time_map if time_map is not None else TimeMap(np.ones(1))
-        self._schedule = Schedule(first, self._time_map)
-        self._on_late = on_late
-        self._output = SetpointOutput(joint_names, publish, publish_command, publish_factor)
+        self._ticker = Ticker(now_ns, period_ns, on_error)
+        clock = StreamClock(self._ticker.behind_ns, simulated or (lambda: False), hold_back)
+        self._state = StreamState(first, time_map if time_map is not None
+                                  else TimeMap(np.ones(1)), clock, now_ns(), waiting)
+        self._ticks = TickPublisher(
+            self._state, SetpointOutput(joint_names, publish, publish_command, publish_factor),
+            now_ns, period_ns, on_error, on_late)
+        #: The speed override's side: the factor, the ramp's limits, the plan time left.
+        self.speed = SpeedView(self._state)
         # Per thread: the ramp's version and the hold-back that start_state saw.
         self._versions: dict[int, tuple[int, int]] = {}
-        self._last_position = first.end.copy()  # the last setpoint published (rad)
-        self._now_ns = now_ns
-        self._period_ns = period_ns
-        self._on_error = on_error
-        # Guards the schedule, the last published time and the next tick; notified when a
-        # setpoint has been published.
-        self._lock = threading.Lock()
-        self._published = threading.Condition(self._lock)
-        self._last_published_ns = BEGINNING_NS  # when the last setpoint was sampled
-        self._sent_ns = -(2 ** 62)  # when the last setpoint sampled is also on the wire
-        self._sent_moving = False  # whether the schedule moved at that setpoint
-        self._last_tick_ns = -(2 ** 62)  # the tick (deadline) it was published for
-        self._next_tick_ns = now_ns()
-        self._waiting = waiting
-        self._ticker = Ticker(now_ns, period_ns, self._next_deadline, self._publish_tick,
-                              on_error)
-        self._clock = StreamClock(self._ticker.behind_ns, simulated or (lambda: False),
-                                  hold_back)
+        self._now_ns, self._period_ns = now_ns, period_ns
         self.stopping = self._ticker.stopping
 
     def start(self) -> str:
         """Start the streaming thread; return the priority it got (:class:`Ticker`)."""
-        return self._ticker.start()
+        return self._ticker.start(self._ticks)
 
     def stop(self, timeout: float = 2.0) -> None:
         """Ask the thread to end and wait for it (s)."""
         self._ticker.stop(timeout)
 
-    # ------------------------------------------------------------------ executor side
-
     def seed(self, position: np.ndarray) -> None:
         """Replace the schedule by a hold at ``position`` (rad) and start publishing."""
-        with self._lock:
-            self._schedule = Schedule(held(position), self._time_map)
-            self._last_position = np.array(position, dtype=float)
-            self._waiting = False
+        with self._state.lock:
+            self._state.seed(position)
 
     @property
     def waiting(self) -> bool:
         """Whether the stream waits for its first setpoint (:meth:`seed`)."""
-        return self._waiting
+        return self._state.waiting
 
     def next_start(self, margin_ns: int = 0) -> int:
         """
@@ -145,10 +128,11 @@ class Stream:
         a motion spliced there is out at the late tick.
         """
         period_ns = self._period_ns()
-        with self._lock:
-            tick, last = self._next_tick_ns, self._last_published_ns
+        state = self._state
+        with state.lock:
+            tick, last = state.next_tick_ns, state.last_published_ns
         now_ns = self._now_ns()
-        if self._clock.overdue(now_ns, last, period_ns):
+        if state.clock.overdue(now_ns, last, period_ns):
             return last
         earliest = max(last + 1, now_ns + margin_ns)
         if tick < earliest:
@@ -164,57 +148,27 @@ class Stream:
         brake) the commanded setpoint. The ramp's version and the hold-back are noted
         for :meth:`splice`.
         """
-        with self._lock:
-            schedule = self._schedule
-            self._versions[threading.get_ident()] = (self._time_map.version,
-                                                     self._clock.held_ns)
-            at = self._clock.at(time_ns)
+        state = self._state
+        with state.lock:
+            schedule = state.schedule
+            self._versions[threading.get_ident()] = (state.time_map.version,
+                                                     state.clock.held_ns)
+            at = state.clock.at(time_ns)
             if scaled:
-                state = schedule.plan_state(schedule.scaled_start(at))
+                start = schedule.plan_state(schedule.scaled_start(at))
             else:
-                state = schedule.setpoint(at)
-            return state, schedule.end_position(at)
+                start = schedule.setpoint(at)
+            return start, schedule.end_position(at)
 
     def setpoint(self, time_ns: int) -> State:
         """Return the commanded setpoint at ``time_ns`` (not before the last published)."""
-        with self._lock:
-            return self._schedule.setpoint(self._clock.at(time_ns))
-
-    def set_factor(self, factor: float) -> list[tuple[PlannedMotion, object]]:
-        """
-        Ramp the speed scaling toward ``factor`` (in [0, 1]) from the last setpoint on.
-
-        From the first 1 ms grid time after the last setpoint published: the next tick
-        already shows it.
-
-        Returns the delayed motions dropped because the change moved the state they were
-        planned from, with the ``tag`` each was spliced with (:meth:`Schedule.set_factor`).
-        """
-        with self._lock:
-            from_ns = self._clock.at(self._last_published_ns) + 1
-            return self._schedule.set_factor(factor, from_ns, FACTOR_DEFER_NS)
-
-    def set_scaling_limits(self, max_acceleration: np.ndarray,
-                           max_jerk: np.ndarray | None) -> None:
-        """Ramp within ``max_acceleration`` (rad/s²) and ``max_jerk`` (rad/s³, or None)."""
-        with self._lock:
-            self._time_map.set_limits(max_acceleration, max_jerk)
-
-    def factor_in_force(self) -> float:
-        """Return the effective (ramped) factor at the last published setpoint."""
-        with self._lock:
-            return self._schedule.factor_at(max(self._clock.at(self._last_published_ns), 0))
-
-    def time_left(self, time_ns: int) -> float:
-        """Return the plan time (s) left at ``time_ns`` (:meth:`Schedule.time_left`)."""
-        with self._lock:
-            return self._schedule.time_left(
-                self._clock.at(max(time_ns, self._last_published_ns)))
+        with self._state.lock:
+            return self._state.schedule.setpoint(self._state.clock.at(time_ns))
 
     def moving_at(self, time_ns: int) -> bool:
         """Tell whether the schedule is in motion at ``time_ns`` (a plan not yet at its end)."""
-        with self._lock:
-            return self._schedule.moving_at(self._clock.at(time_ns))
+        with self._state.lock:
+            return self._state.schedule.moving_at(self._state.clock.at(time_ns))
 
     def last_published(self) -> int:
         """
@@ -223,8 +177,8 @@ class Stream:
         The schedule's state then is exactly that setpoint, so a motion planned from it
         and spliced there before the next tick (:meth:`splice`) continues it seamlessly.
         """
-        with self._lock:
-            return self._last_published_ns
+        with self._state.lock:
+            return self._state.last_published_ns
 
     def last_sent(self) -> tuple[int, bool]:
         """
@@ -236,37 +190,39 @@ class Stream:
         motion there is recorded when it was sampled (the speed ramp commits the next tick
         before it is sent: asked later, the plan time there would be the next tick's).
         """
-        with self._lock:
-            return self._sent_ns, self._sent_moving
+        with self._state.lock:
+            return self._state.sent_ns, self._state.sent_moving
 
     def splice(self, start_ns: int, motion: PlannedMotion, tag: object = None) -> int | None:
         """
         Run ``motion`` from ``start_ns``; return the tick (ns) of its first setpoint.
 
-        ``tag`` (the request) comes back from :meth:`set_factor` if the motion is dropped.
+        ``tag`` (the request) comes back from :meth:`SpeedView.set_factor` if the motion
+        is dropped.
 
         That is ``start_ns`` itself if the stream has not got there yet, or the next tick
         if ``start_ns`` is the last setpoint published. ``None``, splicing nothing, if the
         stream has published a setpoint after ``start_ns``: the motion would jump. Nor if
         a late tick held the schedule back since :meth:`start_state`: planned again.
         """
-        with self._lock:
-            if self._last_published_ns > start_ns:
+        state = self._state
+        with state.lock:
+            if state.last_published_ns > start_ns:
                 return None
             if self._versions.pop(threading.get_ident(), None) not in (
-                    None, (self._time_map.version, self._clock.held_ns)):
+                    None, (state.time_map.version, state.clock.held_ns)):
                 return None  # the factor or the hold-back changed since: plan it again
-            at = self._clock.at(start_ns)
+            at = state.clock.at(start_ns)
             if not motion.unscaled and motion.plan.duration > 0.0:
-                at = self._schedule.scaled_start(at)
-                start_ns = self._clock.node(at)
+                at = state.schedule.scaled_start(at)
+                start_ns = state.clock.node(at)
             first_ns = start_ns
-            if self._last_published_ns == start_ns:
-                first_ns = self._next_tick_ns
-                if first_ns <= self._last_tick_ns:  # the stream is between two ticks
-                    first_ns = self._last_tick_ns + self._period_ns()
+            if state.last_published_ns == start_ns:
+                first_ns = state.next_tick_ns
+                if first_ns <= state.last_tick_ns:  # the stream is between two ticks
+                    first_ns = state.last_tick_ns + self._period_ns()
             # What ran before the last setpoint published is no longer needed.
-            self._schedule.splice(at, motion, self._clock.at(self._last_published_ns), tag)
+            state.schedule.splice(at, motion, state.published_at(), tag)
             return first_ns
 
     def wait_published(self, time_ns: int, timeout: float) -> bool:
@@ -276,50 +232,7 @@ class Stream:
         At most ``timeout`` s; True once published. The node answers a request after its
         first setpoint is out, so a client that reads the answer sees the motion started.
         """
-        with self._published:
-            return self._published.wait_for(
-                lambda: self._sent_ns >= time_ns or self.stopping.is_set(), timeout)
-
-    # ------------------------------------------------------------------ stream thread
-
-    def _next_deadline(self, tick_ns: int) -> None:
-        with self._lock:
-            self._next_tick_ns = tick_ns
-
-    def _publish_tick(self, tick_ns: int) -> None:
-        """
-        Sample the schedule now and publish it as the setpoint of tick ``tick_ns``.
-
-        At the stream time of now: held back if this tick is late (:mod:`.clock`).
-        """
-        with self._lock:
-            now_ns = self._now_ns()
-            if now_ns <= self._last_published_ns or self._waiting:
-                return  # the clock has not moved on (simulated time), or nothing to stream
-            last_ns, held_ns = self._last_published_ns, self._clock.held_ns
-            at = self._clock.sample(now_ns, last_ns, self._period_ns())
-            late_ns = self._clock.held_ns - held_ns
-            state = self._schedule.setpoint(at)
-            moving = self._schedule.moving_at(at)
-            self._schedule.commit(at)
-            factor = self._schedule.factor_at(at) if self._output.wants_factor else 0.0
-            position, velocity = state.position, state.velocity
-            finite = np.count_nonzero(np.isfinite(position)) + \
-                np.count_nonzero(np.isfinite(velocity)) == 2 * position.size
-            if not finite:  # never published: hold the last setpoint from now on
-                position, velocity = self._last_position, np.zeros_like(self._last_position)
-                self._schedule.splice(at, held(position), at)
-            self._last_position = position
-            self._last_published_ns = now_ns
-            self._last_tick_ns = tick_ns
-        if not finite:
-            self._on_error('stream: the schedule gave a non-finite setpoint: holding')
-        self._output.joint_state(now_ns, position, velocity)
-        try:
-            self._output.command_and_factor(position, velocity, factor)
-        finally:  # joint_states is out (a failure after it is logged by the ticker)
-            with self._published:
-                self._sent_ns, self._sent_moving = now_ns, moving and finite
-                self._published.notify_all()
-            if late_ns and self._on_late is not None:
-                self._on_late(now_ns - last_ns, late_ns)
+        state = self._state
+        with state.published:
+            return state.published.wait_for(
+                lambda: state.sent_ns >= time_ns or self.stopping.is_set(), timeout)

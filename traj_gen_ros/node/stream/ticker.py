@@ -1,5 +1,5 @@
 """
-A thread that calls a function at every tick of a fixed grid of the node clock.
+A thread that drives a :class:`TickTarget` at every tick of a fixed grid of the node clock.
 
 Deadlines are absolute (``t0 + k · period``, the period read before each tick: ``rate_hz``
 may change), so a late wake-up does not shift the ticks after it; a tick a period or more
@@ -18,27 +18,35 @@ from __future__ import annotations
 from collections.abc import Callable
 import threading
 import time
+from typing import Protocol
 
 from traj_gen_ros.node.stream.realtime import raise_priority
+
+
+class TickTarget(Protocol):
+    """What the ticker drives at each deadline (ns): the stream's tick (``TickPublisher``)."""
+
+    def next_deadline(self, tick_ns: int) -> None:
+        """Take the next deadline, before the thread waits for it."""
+
+    def tick(self, tick_ns: int) -> None:
+        """Do the work of the tick due at ``tick_ns``; what it raises is logged."""
 
 
 class Ticker:
     """The stream's thread: ``tick(deadline)`` at each deadline of a fixed grid (ns)."""
 
     def __init__(self, now_ns: Callable[[], int], period_ns: Callable[[], int],
-                 next_deadline: Callable[[int], None], tick: Callable[[int], None],
                  on_error: Callable[[str], None]) -> None:
         """
-        Prepare the thread; :meth:`start` starts it.
+        Prepare the thread; :meth:`start` starts it, driving a :class:`TickTarget`.
 
         :param now_ns: the node clock (ns).
         :param period_ns: the period (ns), read before each tick.
-        :param next_deadline: told each deadline before the thread waits for it.
-        :param tick: called at each deadline with it; what it raises is logged
-            (``on_error``) and the ticks go on.
+        :param on_error: logs what a tick raised (the ticks go on).
         """
-        self._now_ns, self._period_ns = now_ns, period_ns
-        self._next_deadline, self._tick, self._on_error = next_deadline, tick, on_error
+        self._now_ns, self._period_ns, self._on_error = now_ns, period_ns, on_error
+        self._target: TickTarget | None = None
         self.stopping = threading.Event()
         self.priority = 'not started'
         self._started = threading.Event()
@@ -67,8 +75,9 @@ class Ticker:
         """Note that the thread waits for a deadline still ahead (the stream thread)."""
         self._on_time_ns = self.monotonic_ns()
 
-    def start(self) -> str:
-        """Start the thread; return the priority it got (:func:`raise_priority`)."""
+    def start(self, target: TickTarget) -> str:
+        """Start the thread, ticking ``target``; return its priority (:func:`raise_priority`)."""
+        self._target = target
         self._thread.start()
         self._started.wait(1.0)
         return self.priority
@@ -95,17 +104,18 @@ class Ticker:
                 return False
 
     def _run(self) -> None:
+        target = self._target
         self.priority = raise_priority()
         self._started.set()
         next_ns = self._now_ns()
         while True:
             period_ns = self._period_ns()
             next_ns += period_ns
-            self._next_deadline(next_ns)
+            target.next_deadline(next_ns)
             if not self._wait_until(next_ns, period_ns):
                 return
             try:
-                self._tick(next_ns)
+                target.tick(next_ns)
             except Exception as error:  # noqa: BLE001 - the ticks outlive any one failure
                 if self.stopping.is_set():
                     return  # shutting down (SIGINT/SIGTERM): the publisher is gone
