@@ -20,9 +20,9 @@ back. It is the polynomial whose derivative has the Bernstein coefficients
 ``(m0, c, …, c, m1)`` of degree ``n``:
 ``λ' = m0 (1−σ)ⁿ + m1 σⁿ + c (1 − (1−σ)ⁿ − σⁿ)``, ``c = ((n+1)Λ − m0 − m1) / (n − 1)``,
 with the least ``n >= 2`` that makes ``c >= 0``: then ``λ' > 0`` throughout
-(``m0 (1−σ)ⁿ + m1 σⁿ > 0`` and the rest is not negative). ``n = 2`` is the cubic Hermite; a sharp corner, whose
-arc is short beside ``D``, needs a higher ``n`` (its speed along the arc dips in the
-middle). Beyond :data:`MAX_DEGREE` the corner is not blended. So
+(``m0 (1−σ)ⁿ + m1 σⁿ > 0`` and the rest is not negative). ``n = 2`` is the cubic
+Hermite; a sharp corner, whose arc is short beside ``D``, needs a higher ``n`` (its speed
+along the arc dips in the middle). Beyond :data:`MAX_DEGREE` the corner is not blended. So
 ``dp/ds = T λ'/D`` and ``d²p/ds² = κ N (λ'/D)² + T λ''/D²``; ``dp/ds`` is continuous at
 both ends, ``d²p/ds²`` steps there (the arc's curvature, and ``λ''``).
 
