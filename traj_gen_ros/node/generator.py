@@ -25,7 +25,11 @@ Interface (all names relative, so namespaces and remapping work):
 * ``~/trajectory`` (``trajectory_msgs/JointTrajectory``, reliable, transient local, depth 1):
   each accepted plan sampled every ``1/rate_hz`` s.
 * ``~/status`` (``diagnostic_msgs/DiagnosticStatus``): OK or ERROR with a reason, per request.
-* ``~/goal`` (``sensor_msgs/JointState``), ``~/via_points`` (``trajectory_msgs/JointTrajectory``).
+* ``~/goal`` (``sensor_msgs/JointState``), ``~/via_points`` (``trajectory_msgs/JointTrajectory``),
+  ``~/pose_goal`` (``geometry_msgs/PoseStamped``), ``~/cartesian_path`` and ``~/circular_goal``
+  (``nav_msgs/Path``): the requests (:data:`~traj_gen_ros.node.requests.handler.READERS`).
+* ``~/tool_pose`` (``geometry_msgs/PoseStamped``): the setpoint's tool pose every tick;
+  ``~/tool_path`` (``nav_msgs/Path``, transient local): the last planned tool path.
 * ``~/stop`` (``std_srvs/Trigger``): brake within ``max_acceleration`` (and ``max_jerk``
   with profile ``scurve``) and hold.
 * ``~/follow_joint_trajectory`` (``control_msgs/action/FollowJointTrajectory``), where
@@ -43,6 +47,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 import dataclasses
+import functools
 import gc
 import os
 import signal
@@ -50,7 +55,6 @@ import sys
 import threading
 import time
 
-from geometry_msgs.msg import PoseStamped
 import numpy as np
 import rclpy
 from rclpy.exceptions import ParameterException
@@ -67,7 +71,7 @@ from traj_gen_ros.node.description.robot_description import NodeLimits
 from traj_gen_ros.node.diagnostics.publisher import CountingAnswers, NodeDiagnostics
 from traj_gen_ros.node.diagnostics.status import RateMeter
 from traj_gen_ros.node.planning.motion import held
-from traj_gen_ros.node.requests.handler import REQUEST_DEPTH, RequestHandler
+from traj_gen_ros.node.requests.handler import READERS, REQUEST_DEPTH, RequestHandler
 from traj_gen_ros.node.requests.thread import NotForTheExecutor, RequestThread
 from traj_gen_ros.node.robot.command_publisher import CommandOutput
 from traj_gen_ros.node.robot.joint_feedback import JointFeedback
@@ -89,11 +93,12 @@ from traj_gen_ros.node.stream.realtime import (
 )
 from traj_gen_ros.node.stream.stream import Stream
 from traj_gen_ros.node.stream.transport import choose_transport
-from trajectory_msgs.msg import JointTrajectory
 
 NODE_NAME = 'trajectory_generator'
 CONFIG_PARAMETERS = ('joints', 'rate_hz', 'profile', 'via_velocities', 'max_velocity',
-                     'max_acceleration', 'lspb_acceleration', 'max_jerk', 'angle_wraparound')
+                     'max_acceleration', 'lspb_acceleration', 'max_jerk', 'angle_wraparound',
+                     'blend_radius', 'max_linear_velocity', 'max_linear_acceleration',
+                     'max_angular_velocity')
 #: The executor thread gets the GIL back to the stream thread this often (s).
 SWITCH_INTERVAL = 0.0001
 #: The spin loop checks this often (s) whether SIGINT/SIGTERM asked it to end.
@@ -151,19 +156,13 @@ class TrajectoryGenerator(Node):
         # Raw: a goal's names and positions are read off the wire (microseconds, against
         # tens for an rclpy message), and a via request's point count, so a huge message is
         # refused without building one Python object per point.
-        self._goal_subscription = self.create_subscription(
-            JointState, '~/goal', self._on_goal, REQUEST_DEPTH, raw=True,
-            callback_group=requests_only)
-        self._via_subscription = self.create_subscription(
-            JointTrajectory, '~/via_points', self._on_via_points, REQUEST_DEPTH, raw=True,
-            callback_group=requests_only)
-        self._pose_subscription = self.create_subscription(
-            PoseStamped, '~/pose_goal', self._on_pose_goal, REQUEST_DEPTH, raw=True,
-            callback_group=requests_only)
+        self._request_subscriptions = {
+            topic: self.create_subscription(
+                reader.message_type, f'~/{topic}', functools.partial(self._on_request, topic),
+                REQUEST_DEPTH, raw=True, callback_group=requests_only)
+            for topic, reader in READERS.items()}
         self._request_thread = RequestThread(
-            self.context, [self._goal_subscription, self._via_subscription,
-                           self._pose_subscription],
-            self.get_logger().error)
+            self.context, list(self._request_subscriptions.values()), self.get_logger().error)
         self.create_service(Trigger, '~/stop', self._on_stop)
         # ~/follow_joint_trajectory where control_msgs is importable (action/server.py)
         tolerances = ToleranceParameters(self, lambda: len(self._config.joints))
@@ -222,14 +221,9 @@ class TrajectoryGenerator(Node):
 
     # ------------------------------------------------------------------ requests
 
-    def _on_goal(self, data: bytes, info: dict) -> None:
-        self._requests.take(self._goal_subscription, JointState, (data, info))
-
-    def _on_via_points(self, data: bytes, info: dict) -> None:
-        self._requests.take(self._via_subscription, JointTrajectory, (data, info))
-
-    def _on_pose_goal(self, data: bytes, info: dict) -> None:
-        self._requests.take(self._pose_subscription, PoseStamped, (data, info))
+    def _on_request(self, topic: str, data: bytes, info: dict) -> None:
+        """Take a request off ``~/<topic>`` (on the request thread)."""
+        self._requests.take(self._request_subscriptions[topic], topic, (data, info))
 
     def _on_stop(self, request: Trigger.Request, response: Trigger.Response
                  ) -> Trigger.Response:

@@ -36,6 +36,8 @@ class PlannedMotion:
     ``unscaled``: the plan runs on the node clock whatever the speed scaling factor
     (``~/stop``, an action cancel: braking at full authority); every other plan's own
     time advances at the factor (:mod:`traj_gen_ros.node.speed.time_map`).
+    ``tool_poses``: a line's or an arc's planned tool path, ``(knots, 4, 4)`` in
+    ``base_frame`` (m), published on ``~/tool_path``; None for joint-space plans.
     """
 
     plan: Trajectory
@@ -43,6 +45,7 @@ class PlannedMotion:
     end: np.ndarray
     note: str = ''
     unscaled: bool = False
+    tool_poses: np.ndarray | None = None
 
 
 def held(position: Sequence[float], profile: str = 'hold', note: str = '') -> PlannedMotion:

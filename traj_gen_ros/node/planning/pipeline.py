@@ -43,7 +43,7 @@ from traj_gen_ros.node.planning.via_path import plan_via
 from traj_gen_ros.node.settings.config import Config
 
 #: A request the pipeline plans: ``~/goal``'s, or points (``~/via_points``, an action goal).
-R = TypeVar('R', GoalRequest, ViaRequest)
+R = TypeVar('R')
 Requested = TypeVar('Requested', GoalRequest, ViaRequest)
 #: Most samples one plan may have on ``~/trajectory`` (duration x rate_hz + 2).
 MAX_TRAJECTORY_POINTS = 200_000

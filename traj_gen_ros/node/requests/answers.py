@@ -10,7 +10,9 @@ newer one's own answer: under a flood one status per batch instead of one per re
 and no request is answered after a newer one.
 
 An accepted plan is published on ``~/trajectory`` sampled every ``1/rate_hz`` s, written
-straight to CDR from the sample arrays (:mod:`traj_gen_ros.node.messages.wire`).
+straight to CDR from the sample arrays (:mod:`traj_gen_ros.node.messages.wire`); a line's
+or an arc's tool path on ``~/tool_path`` (``nav_msgs/Path``, latched: RViz shows it before
+and while the arm moves).
 """
 
 from __future__ import annotations
@@ -19,9 +21,13 @@ from collections.abc import Callable, Sequence
 import json
 
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Path
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.time import Time
+from traj_gen_ros.core.kinematics import pose_quaternion
 from traj_gen_ros.node.messages.wire import joint_trajectory_cdr
 from traj_gen_ros.node.planning.motion import PlannedMotion
 from traj_gen_ros.node.planning.sampling import sample_motion
@@ -47,6 +53,9 @@ class Answers:
             QoSProfile(depth=1, reliability=reliable, durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self._status = node.create_publisher(
             DiagnosticStatus, '~/status', QoSProfile(depth=STATUS_DEPTH, reliability=reliable))
+        self._tool_path = node.create_publisher(
+            Path, '~/tool_path',
+            QoSProfile(depth=1, reliability=reliable, durability=DurabilityPolicy.TRANSIENT_LOCAL))
 
     def values(self, kind: str, frame_id: str, received: int = 0) -> dict[str, str]:
         """
@@ -80,6 +89,24 @@ class Answers:
     def publish_trajectory(self, message: bytes) -> None:
         """Publish an accepted plan's ``~/trajectory`` (from :meth:`trajectory`)."""
         self._trajectory.publish(message)
+
+    def publish_tool_path(self, start_ns: int, motion: PlannedMotion, frame_id: str) -> None:
+        """Publish a line's or an arc's tool path (poses in ``frame_id``), stamped ``start_ns``."""
+        if motion.tool_poses is None:
+            return
+        message = Path()
+        message.header.stamp = Time(nanoseconds=start_ns).to_msg()
+        message.header.frame_id = frame_id
+        for pose in motion.tool_poses:
+            stamped = PoseStamped()
+            stamped.header = message.header
+            position, quaternion = pose_quaternion(pose)
+            point, orientation = stamped.pose.position, stamped.pose.orientation
+            point.x, point.y, point.z = (float(value) for value in position)
+            orientation.x, orientation.y, orientation.z, orientation.w = (
+                float(value) for value in quaternion)
+            message.poses.append(stamped)
+        self._tool_path.publish(message)
 
     def accepted(self, request: Request, motion: PlannedMotion, now_ns: int,
                  first_ns: int) -> None:

@@ -38,11 +38,13 @@ After ``PLAN_ATTEMPTS`` such misses it is refused.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 import threading
 import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Path
 import numpy as np
 from rclpy.subscription import Subscription
 from sensor_msgs.msg import JointState
@@ -50,8 +52,14 @@ from std_srvs.srv import Trigger
 from traj_gen_ros.node.planning.motion import held, PlannedMotion, State
 from traj_gen_ros.node.planning.pipeline import plan_request, plan_stop
 from traj_gen_ros.node.planning.pose_goal import plan_pose
+from traj_gen_ros.node.planning.tool_motion import CARTESIAN_PATH, CIRCULAR_GOAL, plan_tool_path
 from traj_gen_ros.node.requests.answers import Answers
-from traj_gen_ros.node.requests.reading import goal_request, pose_request, via_request
+from traj_gen_ros.node.requests.reading import (
+    goal_request,
+    pose_request,
+    tool_path_request,
+    via_request,
+)
 from traj_gen_ros.node.requests.request import Request, RequestListener
 from traj_gen_ros.node.requests.start_tick import PLAN_ATTEMPTS, Planner, StartTick
 from traj_gen_ros.node.settings.config import Config
@@ -115,8 +123,7 @@ class RequestHandler:
 
     # ------------------------------------------------------------------ take and parse
 
-    def take(self, subscription: Subscription, message_type: type,
-             first: tuple[bytes, dict]) -> None:
+    def take(self, subscription: Subscription, topic: str, first: tuple[bytes, dict]) -> None:
         """
         Parse ``first`` and every request waiting behind it; execute the newest valid one.
 
@@ -125,7 +132,8 @@ class RequestHandler:
         info's ``received_timestamp`` (ns, system clock: when DDS received it) goes into
         the answer as ``received``.
         """
-        parse, planner = READERS[message_type]
+        reader = READERS[topic]
+        message_type, parse, planner = reader.message_type, reader.read, reader.planner
         try:
             with self._lock:
                 self._take_newest(subscription, message_type, first, parse, planner)
@@ -191,6 +199,9 @@ class RequestHandler:
             self._answers.refused(request, f'internal error: {error}')
             return None
         self._answers.publish_trajectory(message)
+        chain = config.kinematics.chain
+        if motion.tool_poses is not None and chain is not None:
+            self._answers.publish_tool_path(start_ns, motion, chain.base_frame)
         if not waited and first_ns - now_ns <= ANSWER_WAIT * 1e9:
             self._stream.wait_published(first_ns, ANSWER_WAIT)
         self._answers.accepted(request, motion, now_ns, first_ns)
@@ -287,6 +298,24 @@ PIPELINE = Planner(plan_request)
 BRAKE = Planner(_brake, commanded=True)
 #: A pose goal: its joint goal by inverse kinematics, then the pipeline as ``~/goal``.
 POSE = Planner(plan_pose)
-#: Each request subscription's message type: how its messages are read and planned.
-READERS = {JointState: (goal_request, PIPELINE), JointTrajectory: (via_request, PIPELINE),
-           PoseStamped: (pose_request, POSE)}
+#: A line or an arc of the tool: its joint path, then the pipeline with its timing.
+TOOL_PATH = Planner(plan_tool_path)
+
+
+@dataclass(frozen=True)
+class Reader:
+    """A request topic's message type, how its messages are read and how they are planned."""
+
+    message_type: type
+    read: Callable[[bytes, int, Sequence[str], Answers], Request | None]
+    planner: Planner
+
+
+#: Each request topic (``~/<name>``): its reader.
+READERS = {
+    'goal': Reader(JointState, goal_request, PIPELINE),
+    'via_points': Reader(JointTrajectory, via_request, PIPELINE),
+    'pose_goal': Reader(PoseStamped, pose_request, POSE),
+    CARTESIAN_PATH: Reader(Path, tool_path_request(CARTESIAN_PATH), TOOL_PATH),
+    CIRCULAR_GOAL: Reader(Path, tool_path_request(CIRCULAR_GOAL), TOOL_PATH),
+}

@@ -3,15 +3,17 @@ Step 2 of a request, *read*: a serialised message into a :class:`Request`, or it
 
 ``~/goal`` (``sensor_msgs/JointState``, its fields read off the CDR bytes), ``~/via_points``
 (``trajectory_msgs/JointTrajectory``, its point count read before it is built) and
-``~/pose_goal`` (``geometry_msgs/PoseStamped``). A malformed request is answered ERROR at
-once and changes nothing.
+``~/pose_goal`` (``geometry_msgs/PoseStamped``), ``~/cartesian_path`` and ``~/circular_goal``
+(``nav_msgs/Path``). A malformed request is answered ERROR at once and changes nothing.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
-from geometry_msgs.msg import PoseStamped
+from geometry_msgs.msg import Pose, PoseStamped
+from nav_msgs.msg import Path
+import numpy as np
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
 from traj_gen_ros.core.kinematics import pose_matrix
@@ -26,6 +28,7 @@ from traj_gen_ros.node.messages.parsing import (
 )
 from traj_gen_ros.node.messages.wire import peek_via_points, read_goal
 from traj_gen_ros.node.planning.pose_goal import PoseRequest
+from traj_gen_ros.node.planning.tool_motion import CIRCULAR_GOAL, ToolPathRequest
 from traj_gen_ros.node.requests.answers import Answers
 from traj_gen_ros.node.requests.request import Request
 from trajectory_msgs.msg import JointTrajectory
@@ -104,12 +107,76 @@ def pose_request(data: bytes, received: int, joints: Sequence[str],
     values = answers.values('pose_goal', frame_id, received)
     stamp = message.header.stamp
     request = Request('pose_goal', values, stamp.sec * 1_000_000_000 + stamp.nanosec, None)
-    position, orientation = message.pose.position, message.pose.orientation
     try:
-        pose = pose_matrix([position.x, position.y, position.z],
-                           [orientation.x, orientation.y, orientation.z, orientation.w])
+        pose = _matrix(message.pose)
     except ValueError as error:
         answers.refused(request, f'pose: {error}')
         return None
     request.parsed = PoseRequest(frame_id, pose, values)
     return request
+
+
+#: Most poses one ``~/cartesian_path`` may have.
+MAX_PATH_POSES = 1000
+
+
+def _matrix(pose: Pose) -> np.ndarray:
+    """Return a message's pose as ``(4, 4)``; its quaternion checked (norm 1 within 1e-3)."""
+    position, orientation = pose.position, pose.orientation
+    return pose_matrix([position.x, position.y, position.z],
+                       [orientation.x, orientation.y, orientation.z, orientation.w])
+
+
+def tool_path_request(kind: str) -> Callable[[bytes, int, Sequence[str], Answers],
+                                             Request | None]:
+    """
+    Return the reader of ``kind`` (``cartesian_path`` or ``circular_goal``): a ``nav_msgs/Path``.
+
+    The path's ``header.frame_id`` applies to every pose; a pose's own non-empty
+    ``frame_id`` must be the same, else the request is refused naming the pose. Each
+    quaternion as for pose goals. ``~/circular_goal`` takes exactly two poses (the interim
+    point and the goal), ``~/cartesian_path`` one to :data:`MAX_PATH_POSES`.
+    """
+    def read(data: bytes, received: int, joints: Sequence[str],
+             answers: Answers) -> Request | None:
+        del joints  # every joint of the chain moves
+        try:
+            message = deserialize_message(data, Path)
+        except Exception as error:  # noqa: BLE001 - wire bytes must never kill the node
+            answers.refused(Request(kind, answers.values(kind, '', received), 0, None),
+                            f'malformed message: {error}')
+            return None
+        frame_id = message.header.frame_id
+        stamp = message.header.stamp
+        request = Request(kind, answers.values(kind, frame_id, received),
+                          stamp.sec * 1_000_000_000 + stamp.nanosec, None)
+        try:
+            poses = _path_poses(kind, frame_id, message.poses)
+        except ValueError as error:
+            answers.refused(request, str(error))
+            return None
+        request.parsed = ToolPathRequest(kind, frame_id, poses, request.values)
+        return request
+    return read
+
+
+def _path_poses(kind: str, frame_id: str, stamped: Sequence[PoseStamped]
+                ) -> tuple[np.ndarray, ...]:
+    """Read a Path's poses, each checked; ``ValueError`` naming the pose."""
+    count = len(stamped)
+    if kind == CIRCULAR_GOAL and count != 2:
+        raise ValueError(f'circular_goal has {count} poses: give exactly two, the interim '
+                         'point and the goal')
+    if not 1 <= count <= MAX_PATH_POSES:
+        raise ValueError(f'cartesian_path has {count} poses: give 1 to {MAX_PATH_POSES}')
+    poses = []
+    for index, pose in enumerate(stamped):
+        own = pose.header.frame_id
+        if own and own != frame_id:
+            raise ValueError(f'poses[{index}] has frame_id {own!r} but the path has '
+                             f'{frame_id!r}: leave it empty or give the same frame')
+        try:
+            poses.append(_matrix(pose.pose))
+        except ValueError as error:
+            raise ValueError(f'poses[{index}]: {error}') from None
+    return tuple(poses)

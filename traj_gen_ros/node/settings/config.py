@@ -6,13 +6,14 @@ The node's parameters, checked together into one :class:`Config` (no ROS here).
 the parameter and saying what is valid. The node calls it at start-up (a bad value ends
 the node with exit status 1) and before every parameter change (a bad value is refused).
 
-Units: rad/s, rad/s², rad/s³, Hz; ``position_gain`` 1/s.
+Units: rad/s, rad/s², rad/s³, Hz; ``position_gain`` 1/s; the tool's m, m/s, m/s², rad/s.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+import math
 
 import numpy as np
 from traj_gen_ros.core.timing import PROFILES  # the core's: the node offers every profile
@@ -39,6 +40,14 @@ VELOCITY = 'velocity'
 COMMAND_OUT_INTERFACES = (POSITION, VELOCITY)
 #: Default ``position_gain`` (1/s): velocity commands are the setpoint's velocity alone.
 DEFAULT_POSITION_GAIN = 0.0
+#: Defaults of the tool's limits on lines and arcs: UR's default tool speed and
+#: acceleration (250 mm/s, 1.2 m/s²; the ISO 10218-1 reduced speed is 250 mm/s too) and
+#: a quarter turn per second, Pilz's default max_rot_vel (π/2 rad/s).
+DEFAULT_MAX_LINEAR_VELOCITY = 0.25
+DEFAULT_MAX_LINEAR_ACCELERATION = 1.2
+DEFAULT_MAX_ANGULAR_VELOCITY = 1.5707963267948966
+#: Largest ``blend_radius`` (m).
+MAX_BLEND_RADIUS = 10.0
 
 
 @dataclass(frozen=True)
@@ -66,6 +75,13 @@ class Config:
     angle_wraparound: bool = True
     #: The kinematic chain in force, or why there is none (tool-frame requests).
     kinematics: RobotKinematics = RobotKinematics()
+    #: Corners of ``~/cartesian_path`` blended within this distance (m); 0: stop at each.
+    blend_radius: float = 0.0
+    #: The tool's limits on lines and arcs: speed (m/s), the whole acceleration vector of
+    #: the tool point (m/s²), angular speed (rad/s).
+    max_linear_velocity: float = DEFAULT_MAX_LINEAR_VELOCITY
+    max_linear_acceleration: float = DEFAULT_MAX_LINEAR_ACCELERATION
+    max_angular_velocity: float = DEFAULT_MAX_ANGULAR_VELOCITY
 
     @property
     def profile_acceleration(self) -> np.ndarray:
@@ -120,13 +136,18 @@ def initial_state(joints: Sequence[str], initial_positions: Sequence[float]) -> 
 def make_config(joints: Sequence[str], rate_hz: float, profile: str, via_velocities: str,
                 max_velocity: object, max_acceleration: object,
                 lspb_acceleration: object, max_jerk: object = DEFAULT_MAX_JERK,
-                angle_wraparound: object = True) -> Config:
+                angle_wraparound: object = True, blend_radius: object = 0.0,
+                max_linear_velocity: object = DEFAULT_MAX_LINEAR_VELOCITY,
+                max_linear_acceleration: object = DEFAULT_MAX_LINEAR_ACCELERATION,
+                max_angular_velocity: object = DEFAULT_MAX_ANGULAR_VELOCITY) -> Config:
     """
     Validate the node parameters together; raise ``ValueError`` with the reason.
 
     Limits in rad/s (``max_velocity``), rad/s² (``max_acceleration``,
     ``lspb_acceleration``) and rad/s³ (``max_jerk``), one value or one per joint;
-    ``angle_wraparound`` a bool.
+    ``angle_wraparound`` a bool. The tool's: ``blend_radius`` (m, >= 0),
+    ``max_linear_velocity`` (m/s), ``max_linear_acceleration`` (m/s²),
+    ``max_angular_velocity`` (rad/s), each > 0.
     """
     names = check_joint_names(joints)
     if isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float)) \
@@ -153,8 +174,28 @@ def make_config(joints: Sequence[str], rate_hz: float, profile: str, via_velocit
     a_lspb = np.where(a_lspb == 0.0, a_max, a_lspb)
     if not isinstance(angle_wraparound, bool):
         raise ValueError(f'angle_wraparound must be true or false, got {angle_wraparound!r}')
+    tool = {name: _tool_number(name, value, name == 'blend_radius') for name, value in (
+        ('blend_radius', blend_radius), ('max_linear_velocity', max_linear_velocity),
+        ('max_linear_acceleration', max_linear_acceleration),
+        ('max_angular_velocity', max_angular_velocity))}
     return Config(names, float(rate_hz), profile, via_velocities, v_max, a_max, a_lspb, j_max,
-                  angle_wraparound=angle_wraparound)
+                  angle_wraparound=angle_wraparound, **tool)
+
+
+_TOOL_UNITS = {'blend_radius': 'm', 'max_linear_velocity': 'm/s',
+               'max_linear_acceleration': 'm/s^2', 'max_angular_velocity': 'rad/s'}
+
+
+def _tool_number(name: str, value: object, zero: bool) -> float:
+    """Check one of the tool's parameters: finite, > 0 (``zero``: >= 0, at most 10 m)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) \
+            or not math.isfinite(value) or value < 0.0 or (value == 0.0 and not zero) \
+            or (zero and value > MAX_BLEND_RADIUS):
+        rule = (f'in [0, {MAX_BLEND_RADIUS:g}] (0: stop at each corner)' if zero
+                else 'finite and > 0')
+        raise ValueError(f'{name} must be a number {rule}, {_TOOL_UNITS[name]}; '
+                         f'got {value!r}')
+    return float(value)
 
 
 def check_command_out_type(value: str) -> str:

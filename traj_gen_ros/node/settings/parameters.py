@@ -42,11 +42,15 @@ from rclpy.parameter import Parameter
 from traj_gen_ros.node.settings.config import (
     COMMAND_OUT_INTERFACES,
     COMMAND_OUT_TYPES,
+    DEFAULT_MAX_ANGULAR_VELOCITY,
     DEFAULT_MAX_JERK,
+    DEFAULT_MAX_LINEAR_ACCELERATION,
+    DEFAULT_MAX_LINEAR_VELOCITY,
     DEFAULT_POSITION_GAIN,
     DEFAULT_STATE_TOLERANCE,
     DEFAULT_TIMEOUT,
     FLOAT64_MULTI_ARRAY,
+    MAX_BLEND_RADIUS,
     MAX_RATE_HZ,
     MIN_RATE_HZ,
     POSITION,
@@ -57,7 +61,8 @@ DEFAULT_JOINTS = [f'joint_{index}' for index in range(1, 7)]
 PER_JOINT = 'one value for all joints or one per joint'
 #: Parameters declared as doubles: an integer is stored as a double.
 DOUBLES = ('rate_hz', 'joint_topic_timeout', 'allowed_start_tolerance', 'goal_time_tolerance',
-           'stopped_velocity_tolerance', 'speed_scaling')
+           'stopped_velocity_tolerance', 'speed_scaling', 'blend_radius', 'max_linear_velocity',
+           'max_linear_acceleration', 'max_angular_velocity')
 #: Per-joint parameters, declared as double arrays: one number is stored as ``[number]``.
 DOUBLE_ARRAYS = ('initial_positions', 'max_velocity', 'max_acceleration', 'lspb_acceleration',
                  'max_jerk', 'min_position', 'max_position', 'state_tolerance', 'path_tolerance',
@@ -139,6 +144,19 @@ def descriptors(joint_count: int) -> dict[str, tuple[object, ParameterDescriptor
             description='Link whose pose pose goals set; empty: the end of the fixed joints '
                         'below the last joint, where there is one (read only).',
             type=ParameterType.PARAMETER_STRING, read_only=True)),
+        'blend_radius': _non_negative(
+            'Corners of ~/cartesian_path are blended by a tangent arc from this distance '
+            'before to this distance after each (clipped to half the shorter segment), m; '
+            '0: the tool stops at each corner.', 0.0, MAX_BLEND_RADIUS),
+        'max_linear_velocity': _positive(
+            'Speed limit of the tool point on lines and arcs, m/s.',
+            DEFAULT_MAX_LINEAR_VELOCITY),
+        'max_linear_acceleration': _positive(
+            'Limit of the whole acceleration vector of the tool point (tangential and '
+            'centripetal) on lines and arcs, m/s^2.', DEFAULT_MAX_LINEAR_ACCELERATION),
+        'max_angular_velocity': _positive(
+            "Limit of the tool's angular speed on lines and arcs, rad/s.",
+            DEFAULT_MAX_ANGULAR_VELOCITY),
         'publish_tool_pose': (True, ParameterDescriptor(
             description="Publish the setpoint's tool pose on ~/tool_pose at the stream rate "
                         'while a kinematic chain is in force (read only).',
@@ -205,6 +223,13 @@ def _non_negative(description: str, default: float, upper: float) -> tuple[float
     return default, ParameterDescriptor(
         description=description, type=ParameterType.PARAMETER_DOUBLE,
         floating_point_range=[FloatingPointRange(from_value=0.0, to_value=upper)])
+
+
+def _positive(description: str, default: float) -> tuple[float, object]:
+    return default, ParameterDescriptor(
+        description=description, type=ParameterType.PARAMETER_DOUBLE,
+        additional_constraints='finite and > 0',
+        floating_point_range=[FloatingPointRange(from_value=0.0, to_value=1000.0)])
 
 
 def action_descriptors() -> dict[str, tuple[object, ParameterDescriptor]]:

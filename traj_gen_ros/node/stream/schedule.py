@@ -104,6 +104,11 @@ class Schedule:
             return State(motion.end.copy(), zeros, zeros.copy())
         return State(*state_at(motion.plan, elapsed))
 
+    def running(self, time_ns: int) -> tuple[PlannedMotion, float]:
+        """Return the motion in effect at ``time_ns`` and its own time there (s)."""
+        segment = self._segment(time_ns)
+        return segment.motion, self._elapsed(segment, time_ns)[0]
+
     def plan_state(self, time_ns: int) -> State:
         """
         Return the state a scaled motion starting at ``time_ns`` is planned from.

@@ -160,6 +160,12 @@ class Stream:
                 start = schedule.setpoint(at)
             return start, schedule.end_position(at)
 
+    def running_at(self, time_ns: int) -> tuple[PlannedMotion, float]:
+        """Return the motion in effect at ``time_ns`` and its own time there (s)."""
+        state = self._state
+        with state.lock:
+            return state.schedule.running(state.clock.at(time_ns))
+
     def setpoint(self, time_ns: int) -> State:
         """Return the commanded setpoint at ``time_ns`` (not before the last published)."""
         with self._state.lock:

@@ -1,0 +1,143 @@
+"""
+Lines and arcs of the tool (LIN, CIRC): ``~/cartesian_path`` and ``~/circular_goal``.
+
+A request's poses are resolved in their frame (as a pose goal's:
+:func:`~traj_gen_ros.node.planning.pose_goal.target_in_base`, at the start state), the arm
+brakes to rest if it moves (:func:`~traj_gen_ros.node.planning.pipeline.plan_stop`), and
+from that rest the core plans the tool's path (:mod:`traj_gen_ros.core.cartesian`): the
+ideal path (straight lines with ``blend_radius`` blends, or the circle through the
+interim point), the joint path that follows it (refused where Craig §7.5's problems
+arise: out of reach, a joint limit, a singularity, a configuration flip) and its
+time-optimal timing under the joint limits and the tool's. The brake and the path are one
+plan, through the pipeline's checks (:data:`PATH`). No ROS here.
+
+Units: m, rad, s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from traj_gen_ros.core.cartesian.joint_path import follow
+from traj_gen_ros.core.cartesian.path_refusal import PathRefusal
+from traj_gen_ros.core.cartesian.path_timing import time_path, ToolLimits
+from traj_gen_ros.core.cartesian.samples import IdealPath, JointPath
+from traj_gen_ros.core.cartesian.tool_path import circular_path, straight_path
+from traj_gen_ros.core.sequences import concatenate
+from traj_gen_ros.core.trajectory import Trajectory
+from traj_gen_ros.node.messages.parsing import RequestError
+from traj_gen_ros.node.planning.motion import PlannedMotion, State
+from traj_gen_ros.node.planning.pipeline import plan_request, plan_stop, Steps
+from traj_gen_ros.node.planning.pose_goal import PoseRequest, target_in_base
+from traj_gen_ros.node.settings.config import Config
+
+#: The request kinds, as they appear on ``~/status``.
+CARTESIAN_PATH, CIRCULAR_GOAL = 'cartesian_path', 'circular_goal'
+#: Each kind's word for its plan on ``~/status`` (``profile=``).
+PROFILE = {CARTESIAN_PATH: 'line', CIRCULAR_GOAL: 'arc'}
+
+
+@dataclass
+class ToolPathRequest:
+    """
+    Tool poses in ``frame_id`` (each ``(4, 4)``, m), as read; ``answer`` gets the plan's words.
+
+    ``~/cartesian_path``: the corners of the lines, in order; ``~/circular_goal``: the
+    interim point and the goal.
+    """
+
+    kind: str
+    frame_id: str
+    poses: tuple[np.ndarray, ...]
+    answer: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class JointPathRequest:
+    """
+    A tool path turned into joints, as the pipeline's checks see it.
+
+    ``joints`` are every joint (indices), ``positions`` the joint path's breakpoints
+    (``(points, joints)``, rad or m), ``brake`` the plan to rest that comes first.
+    """
+
+    joints: np.ndarray
+    positions: np.ndarray
+    brake: Trajectory
+    tool_path: IdealPath
+    joint_path: JointPath
+    kind: str
+
+
+def joint_path_request(config: Config, request: ToolPathRequest, state: State
+                       ) -> JointPathRequest:
+    """
+    Resolve the poses, brake to rest, and follow the tool path from there by joints.
+
+    :raises RequestError: no kinematics, an unknown frame, a path that cannot be drawn
+        (coincident or collinear points) or followed (where and why), or profile scurve.
+    """
+    if config.profile == 'scurve':
+        raise RequestError(f'{request.kind} under profile scurve is not supported yet (the '
+                           'jerk bound along a tool path is not implemented): set profile '
+                           'to lspb, cubic or quintic')
+    chain = config.kinematics.chain
+    targets = [target_in_base(config, PoseRequest(request.frame_id, pose), state.position)
+               for pose in request.poses]
+    brake = plan_stop(config, state).plan
+    rest = brake.sample(brake.duration)[0][0]
+    start = chain.forward(rest)
+    try:
+        if request.kind == CIRCULAR_GOAL:
+            path = circular_path(start, targets[0], targets[1])
+        else:
+            path = straight_path(start, targets, config.blend_radius)
+    except ValueError as error:
+        raise RequestError(f'{request.kind}: {error}') from None
+    limits = config.limits
+    lower = None if limits is None else limits.position.lower
+    upper = None if limits is None else limits.position.upper
+    try:
+        joint_path = follow(chain, path, rest, lower=lower, upper=upper)
+    except PathRefusal as refusal:
+        raise RequestError(f'{request.kind}: {refusal}') from None
+    positions = joint_path.joints.sample(joint_path.joints.breakpoints)[0]
+    return JointPathRequest(np.arange(len(config.joints)), positions, brake, path, joint_path,
+                            request.kind)
+
+
+def _timed(config: Config, state: State, hold_at: np.ndarray, request: JointPathRequest
+           ) -> PlannedMotion:
+    """Time the joint path under the joint and tool limits; the brake first, one plan."""
+    del state, hold_at  # the path starts where the brake ends; every joint moves
+    tool = ToolLimits(config.max_linear_velocity, config.max_linear_acceleration,
+                      config.max_angular_velocity)
+    timed = time_path(request.tool_path, request.joint_path, config.max_velocity,
+                      config.max_acceleration, tool, joint_names=config.joints)
+    plan = concatenate([request.brake, timed.trajectory])
+    end = plan.sample(plan.duration)[0][0]
+    knots = request.joint_path.joints.breakpoints
+    return PlannedMotion(plan, PROFILE[request.kind], end,
+                         f'speed bounded by {timed.describe(config.joints)}',
+                         tool_poses=request.tool_path.sample(knots).poses())
+
+
+def _as_planned(start: np.ndarray, request: JointPathRequest, mask: np.ndarray
+                ) -> JointPathRequest:
+    """Leave a joint path as it is: it is continuous from the start (no whole turns)."""
+    del start, mask
+    return request
+
+
+#: A tool path's steps in the pipeline: its timing; no unwrap (the path is continuous).
+PATH: Steps[JointPathRequest] = Steps(plan=_timed, unwrap=_as_planned)
+
+
+def plan_tool_path(config: Config, state: State, hold_at: np.ndarray,
+                   request: ToolPathRequest) -> PlannedMotion:
+    """Plan a line or an arc from ``state``: its joint path, then the pipeline (:data:`PATH`)."""
+    joint_request = joint_path_request(config, request, state)
+    motion = plan_request(config, state, hold_at, joint_request, PATH)
+    request.answer['bounded_by'] = motion.note.removeprefix('speed bounded by ')
+    return motion
