@@ -2,8 +2,9 @@
 The ``traj-gen`` command: plan, print and plot Craig ch. 7 trajectories from a shell.
 
 ``solve`` and ``plot`` run the ROS-free core solver, ``fk`` and ``ik`` its kinematics of a
-URDF file (:mod:`traj_gen_ros.cli.kinematics`); ``goal``, ``via``, ``pose`` and
-``plot --topic`` talk to a running generator node (:mod:`traj_gen_ros.cli.ros`, which
+URDF file (:mod:`traj_gen_ros.cli.kinematics`), ``solve|plot line|arc`` its tool paths
+(:mod:`traj_gen_ros.cli.tool_path_commands`); ``goal``, ``via``, ``pose``, ``line``, ``arc``
+and ``plot --topic`` talk to a running generator node (:mod:`traj_gen_ros.cli.ros`, which
 imports rclpy only when one of them runs).
 
 Argument grammar: every ``--points`` value is one point; a point of several joints is
@@ -41,6 +42,7 @@ from traj_gen_ros.cli.common import (  # shared with cli_ros, which must not imp
 from traj_gen_ros.cli.kinematics_args import add_kinematics_parsers, add_pose_parser
 from traj_gen_ros.cli.plan import make_plan, Plan
 from traj_gen_ros.cli.report import describe, format_text
+from traj_gen_ros.cli.tool_path_args import add_tool_path_parsers, tool_path_parser
 
 PROG = 'traj-gen'
 # What requirements.txt pins; named in the error when matplotlib is missing.
@@ -58,6 +60,8 @@ examples:
   traj-gen solve cubic-via --points 0 1 0.5 --durations 1 1 --velocities continuous
   traj-gen solve min-time --points 0,0 1,2 --max-velocity 1 --max-acceleration 2 --shape lspb
   traj-gen solve scurve --points 0,0 1,2 --max-velocity 1 --max-acceleration 2 --max-jerk 10
+  traj-gen solve line --urdf panda.urdf --start 0,-0.785,0,-2.356,0,1.571,0.785 \
+      --to 0.4,0.1,0.45,1,0,0,0      (a tool path: see traj-gen solve line --help)
 """
 
 PLOT_EXAMPLES = """\
@@ -68,6 +72,7 @@ examples:
   traj-gen plot scurve --points 0 1 0.5 --max-velocity 1 --max-acceleration 2 \
       --max-jerk 10 -o scurve.png
   traj-gen plot --topic /trajectory_generator/trajectory -o node.png --timeout 10
+  traj-gen plot arc --urdf panda.urdf --start … --to INTERIM GOAL -o arc.png  (see --help)
 """
 
 GOAL_EXAMPLES = """\
@@ -221,12 +226,13 @@ def build_parser() -> argparse.ArgumentParser:
                      help='one position per joint, then @T (seconds from the start)')
     add_ros_arguments(via)
     add_pose_parser(commands, add_ros_arguments)
+    add_tool_path_parsers(commands, add_ros_arguments)
     return parser
 
 
 def add_ros_arguments(parser: argparse.ArgumentParser,
                       degrees_help: str = 'positions in degrees (sent in radians)') -> None:
-    """Add the options shared by ``goal``, ``via`` and ``pose``."""
+    """Add the options shared by ``goal``, ``via``, ``pose``, ``line`` and ``arc``."""
     parser.add_argument('--node', default='/trajectory_generator',
                         help='full name of the generator node (default /trajectory_generator)')
     parser.add_argument('--timeout', type=float, default=10.0, metavar='S',
@@ -302,7 +308,7 @@ def _plot_title(plan: Plan) -> str:
 
 
 def run_ros(args: argparse.Namespace) -> int:
-    """``traj-gen goal`` / ``via`` / ``pose``: send a request to a running node."""
+    """``traj-gen goal`` / ``via`` / ``pose`` / ``line`` / ``arc``: send to a running node."""
     if args.plot:
         require_plotting()  # before waiting for ROS: a missing matplotlib is said at once
     from traj_gen_ros.cli import ros as cli_ros
@@ -315,16 +321,26 @@ def run_kinematics(args: argparse.Namespace) -> int:
     return kinematics.run_fk(args) if args.command == 'fk' else kinematics.run_ik(args)
 
 
+def run_tool_path(args: argparse.Namespace) -> int:
+    """``traj-gen solve|plot line|arc``: a tool path planned offline from a URDF."""
+    if args.command == 'plot':
+        require_plotting()
+    from traj_gen_ros.cli import tool_path_commands  # the core's kinematics: only for these
+    return tool_path_commands.run(args)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``traj-gen`` with ``argv`` (default ``sys.argv[1:]``); return the exit status."""
     parser = build_parser()
     command = 'traj-gen'
     try:
-        args = parser.parse_args(argv)
+        argv = list(sys.argv[1:] if argv is None else argv)
+        args = (tool_path_parser(argv, _Parser, PROG) or parser).parse_args(argv)
         command = f'traj-gen {args.command}'
         runner = {'solve': run_solve, 'plot': run_plot, 'goal': run_ros, 'via': run_ros,
-                  'pose': run_ros, 'fk': run_kinematics, 'ik': run_kinematics}
-        return runner[args.command](args)
+                  'pose': run_ros, 'line': run_ros, 'arc': run_ros, 'fk': run_kinematics,
+                  'ik': run_kinematics}
+        return (run_tool_path if 'tool_path' in args else runner[args.command])(args)
     except UsageError as error:
         print(f'{error.prog or command}: error: {_one_line(error)}', file=sys.stderr)
         return EXIT_USAGE

@@ -4,11 +4,10 @@ ROS side of ``traj-gen``: send goals, via points and poses to a generator, recor
 :mod:`traj_gen_ros.cli.main` imports this module only when one of these commands runs (the
 offline subcommands need no ROS). A status answers a request when it comes from the node
 (``name`` is its full name) after the request was published, its ``request`` value names
-the request's kind (``goal``, ``via_points`` or ``pose_goal``) and its ``frame_id`` value
-echoes the request's ``header.frame_id``: for a goal or via points a token of ``traj-
-gen``'s own (``traj-gen/<pid>/<random>``), for a pose goal its frame (``--frame``, which
-names what the pose is relative to). A node that does not echo ``frame_id`` is matched on
-the kind alone.
+the request's kind (``goal``, ``via_points``, ``pose_goal``, ``cartesian_path``, ...) and
+its ``frame_id`` value echoes the request's ``header.frame_id``: for a goal or via points a
+token of ``traj-gen``'s own (``traj-gen/<pid>/<random>``), for a pose, line or arc its frame
+(``--frame``). A node that does not echo ``frame_id`` is matched on the kind alone.
 """
 
 from __future__ import annotations
@@ -40,6 +39,8 @@ from traj_gen_ros.cli.common import (
     UsageError,
 )
 from traj_gen_ros.cli.pose_goal import answered_joints, pose_message
+from traj_gen_ros.cli.tool_path_args import TOPICS
+from traj_gen_ros.cli.tool_path_goal import path_message, plan_end
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 if TYPE_CHECKING:  # matplotlib is imported only when a plot is made
@@ -168,10 +169,13 @@ def _request_message(args: argparse.Namespace
     """
     Build the request; return it, its kind, the named joints and their final targets.
 
-    A pose goal names no joints: its targets are the joint values the node's answer gives.
+    A pose goal names no joints: its targets are the joint values the node's answer gives
+    (a line's or an arc's: the end of the node's plan).
     """
     if args.command == 'pose':
         return pose_message(args), 'pose_goal', None, None
+    if args.command in TOPICS:
+        return path_message(args), TOPICS[args.command], None, None
     token = f'traj-gen/{os.getpid()}/{secrets.token_hex(4)}'
     if args.command == 'goal':
         names, positions = goal_from_args(args.positions, args.degrees)
@@ -190,7 +194,7 @@ def _request_message(args: argparse.Namespace
 
 
 def run_request(args: argparse.Namespace) -> int:
-    """``traj-gen goal`` / ``via`` / ``pose``: publish, wait for the status, print it."""
+    """``traj-gen goal`` / ``via`` / ``pose`` / ``line`` / ``arc``: send, print the answer."""
     node = node_name(args.node)
     _check_timeout(args.timeout)
     message, kind, names, targets = _request_message(args)
@@ -205,7 +209,7 @@ def run_request(args: argparse.Namespace) -> int:
             ros.create_subscription(JointState, args.joint_states or joint_states_topic(node),
                                     states.append, _reliable(10))
         plans: list = []
-        if args.plot:
+        if args.plot or (args.wait and args.command in TOPICS):
             ros.create_subscription(JointTrajectory, f'{node}/trajectory', plans.append,
                                     _reliable(1, transient_local=True))
         session.wait(lambda: publisher.get_subscription_count() > 0
@@ -238,6 +242,8 @@ def run_request(args: argparse.Namespace) -> int:
         if args.plot:
             _plot_plan(session, plans, sent_ns, message, args)
         if args.wait:
+            if args.command in TOPICS:  # at rest where the node's plan of it ends
+                names, targets = plan_end(_our_plan(session, plans, sent_ns, args))
             _wait_for_end(session, states, status, names, targets, args.timeout)
     return EXIT_OK
 
@@ -253,14 +259,18 @@ def _plot_plan(session: _Session, plans: list, sent_ns: int, message: object,
     """
     from traj_gen_ros.cli import plot as plotting  # matplotlib: loaded only when a plot is made
 
-    def ours() -> object:
-        return next((plan for plan in plans if _stamp_ns(plan.header.stamp) >= sent_ns), None)
-
-    plan = session.wait(ours, args.timeout, f'no {node_name(args.node)}/trajectory for the '
-                        'request')
+    plan = _our_plan(session, plans, sent_ns, args)
     figure = topic_figure(plan, f'{node_name(args.node)}/trajectory', args.degrees, args.size,
                           request=message)
     report_plot(plotting.write_png(figure, args.plot, len(plan.joint_names)), args.json)
+
+
+def _our_plan(session: _Session, plans: list, sent_ns: int, args: argparse.Namespace) -> object:
+    def ours() -> object:
+        return next((plan for plan in plans if _stamp_ns(plan.header.stamp) >= sent_ns), None)
+
+    return session.wait(ours, args.timeout, f'no {node_name(args.node)}/trajectory for the '
+                        'request')
 
 
 def _stamp_ns(stamp: object) -> int:
