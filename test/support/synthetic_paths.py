@@ -85,22 +85,26 @@ class PiecePath:
         for index, shape in enumerate(self.pieces):
             mask = piece == index
             if mask.any():
-                for array, value in zip(out, shape.evaluate(s[mask] - self.knots[index])):
+                values = shape.evaluate(s[mask] - self.knots[index])
+                for array, value in zip(out, values, strict=True):
                     array[mask] = value
         rotation = np.broadcast_to(np.eye(3), (len(s), 3, 3)).copy()
         return PathSamples(s, out[0], rotation, out[1], out[2], out[3], np.zeros_like(out[3]))
 
 
 def line(length: float, direction=(1.0, 0.0, 0.0), turn: float = 0.0) -> PiecePath:
-    """A straight line of ``length`` (units of path) whose combined length is split into a
-    fraction ``√(1 - turn²)`` of travel and ``turn`` of rotation about z."""
+    """
+    Make a straight line ``length`` long (units of path), turning about z on the way.
+
+    Per unit of path the tool travels ``√(1 - turn²)`` m and turns ``turn`` rad.
+    """
     unit = np.asarray(direction, float) / np.linalg.norm(direction)
     return PiecePath([Line(np.zeros(3), unit * np.sqrt(1.0 - turn ** 2), length,
                            np.array([0.0, 0.0, turn]))])
 
 
 def arc(radius: float, angle: float) -> PiecePath:
-    """A circular arc in the xy-plane from ``(radius, 0, 0)``, turning ``angle`` (rad)."""
+    """Make a circular arc in the xy-plane from ``(radius, 0, 0)``, turning ``angle`` (rad)."""
     return PiecePath([Arc(np.zeros(3), radius, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]),
                           0.0, angle)])
 
@@ -152,7 +156,7 @@ class AnalyticJoints:
 
 
 def seven_joints(seed: int = 7, scale: float = 1.0) -> AnalyticJoints:
-    """A 7-joint arm's path, roughly: up to ~2 rad/m of each joint, bending over ~0.1 m."""
+    """Make a 7-joint arm's path, roughly: up to ~2 rad/m of each joint, bending over ~0.1 m."""
     rng = np.random.default_rng(seed)
     return AnalyticJoints(
         offset=rng.uniform(-1.0, 1.0, 7), slope=scale * rng.uniform(-2.0, 2.0, 7),

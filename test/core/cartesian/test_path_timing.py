@@ -5,8 +5,14 @@ import re
 
 import numpy as np
 import pytest
-from synthetic_paths import AnalyticJoints, blended_corner, corner, line, linear_joint, \
-    seven_joints
+from synthetic_paths import (
+    AnalyticJoints,
+    blended_corner,
+    corner,
+    line,
+    linear_joint,
+    seven_joints,
+)
 from traj_gen_ros.core.cartesian import path_timing
 from traj_gen_ros.core.cartesian.path_timing import Bound, time_path, ToolLimits
 from traj_gen_ros.core.kinematic_limits import limit_violation
@@ -54,7 +60,7 @@ def test_the_angular_speed_bounds_a_line_that_turns():
 
 @pytest.fixture(scope='module')
 def timings():
-    """A few timed paths with the analytic joints they follow."""
+    """Time a few paths; keep the analytic joints they follow."""
     cases = {
         'joints bind': (line(0.3), seven_joints(7), 1.0, 4.0, NO_TOOL),
         'tool binds': (line(0.3), seven_joints(3), 2.0, 8.0, ToolLimits(0.5, 2.0, 1.0)),
@@ -166,9 +172,9 @@ def test_a_joint_velocity_that_binds_in_the_middle_is_described():
     timed = time_path(path, joints.joint_path(path), [10.0, 1.5], 100.0,
                       ToolLimits(0.5, 10.0), joint_names=['j0', 'j1'])
     # 1/3 and 2/3 fall inside grid intervals: the run starts and ends within one of them.
-    text = ("max_linear_acceleration from 0 % to 4 % and from 96 % to 100 % of the path; "
+    text = ('max_linear_acceleration from 0 % to 4 % and from 96 % to 100 % of the path; '
             "joint 'j1' velocity from 3[34] % to 6[67] % of the path; max_linear_velocity "
-            "elsewhere")
+            'elsewhere')
     assert re.fullmatch(text, timed.describe())
     assert timed.describe(['a', 'b']).count("joint 'b' velocity") == 1
     middle = timed.bounds[len(timed.bounds) // 2]

@@ -1,4 +1,5 @@
-"""time_path against an independent time-optimal timing: phase-plane integration on 10,000+ points.
+"""
+time_path against an independent time-optimal timing: the phase plane on 10,000+ points.
 
 The oracle (written here, sharing nothing with the package's timing) is the classical
 method (Bobrow, Dubowsky & Gibson 1985; Shin & McKay 1985) in its numerical form: the
@@ -22,7 +23,7 @@ POINTS = 10_000
 def _u_range(dq, ddq, amax, tool, x):
     """Smallest and largest s̈ at ṡ² = x at one point (Python floats)."""
     lo, hi = -math.inf, math.inf
-    for rate, bend, limit in zip(dq, ddq, amax):
+    for rate, bend, limit in zip(dq, ddq, amax, strict=True):
         if rate != 0.0:
             one, two = (limit - bend * x) / rate, (-limit - bend * x) / rate
             lo, hi = max(lo, min(one, two)), min(hi, max(one, two))
@@ -44,12 +45,12 @@ def reference_duration(path, joints, vmax, amax, tool: ToolLimits, points=POINTS
     sides = {}
     for side in ('right', 'left'):
         sample = path.sample(s, side)
-        A, B = sample.velocity, sample.acceleration
-        terms = np.stack([(A * A).sum(1), (A * B).sum(1),
-                          np.linalg.norm(np.cross(A, B), axis=1)], axis=1)
+        rate, bend = sample.velocity, sample.acceleration
+        terms = np.stack([(rate * rate).sum(1), (rate * bend).sum(1),
+                          np.linalg.norm(np.cross(rate, bend), axis=1)], axis=1)
         with np.errstate(divide='ignore'):
             speed = np.minimum(np.min((vmax / np.abs(dq)) ** 2, axis=1),
-                               (tool.max_linear_velocity / np.linalg.norm(A, axis=1)) ** 2)
+                               (tool.max_linear_velocity / np.linalg.norm(rate, axis=1)) ** 2)
             speed = np.minimum(speed, (tool.max_angular_velocity
                                        / np.linalg.norm(sample.angular, axis=1)) ** 2)
         sides[side] = (terms, speed)

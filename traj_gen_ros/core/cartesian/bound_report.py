@@ -94,7 +94,7 @@ def describe(bounds: Sequence[Bound], s: np.ndarray,
     """
     length = float(s[-1] - s[0])
     runs: list[list] = []
-    for bound, start, end in zip(bounds, s[:-1].tolist(), s[1:].tolist()):
+    for bound, start, end in zip(bounds, s[:-1].tolist(), s[1:].tolist(), strict=True):
         if runs and runs[-1][0] == bound:
             runs[-1][2] = end
         else:

@@ -235,7 +235,7 @@ def assemble(grid: PathGrid, max_velocity: np.ndarray, max_acceleration: np.ndar
 def _tool_edges(grid: PathGrid, x_max: np.ndarray, limit: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
-    The polygon's edges at both ends of every interval, ``(n, 2 · TOOL_EDGES)`` each.
+    Build the polygon's edges at both ends of every interval, ``(n, 2 · TOOL_EDGES)`` each.
 
     Edge ``k`` is ``cos φ_k w_t + sin φ_k w_n <= a cos(π / 2M)``; it is kept where its
     lowest ``w_n`` is within the ``κ x`` the interval can reach (else ``a = b = c = 0``).

@@ -272,7 +272,7 @@ def _tool_ratios(path: IdealPath, grid: PathGrid, x: np.ndarray, u: np.ndarray,
 
 def _shrink(ratios: np.ndarray) -> np.ndarray:
     """
-    The factor on each interval's limits for the overshoots ``ratios`` (``(kinds, n, …)``).
+    Give the factor on each interval's limits for the overshoots ``ratios`` ``(kinds, n, …)``.
 
     Twice the excess, and on the neighbours too: an interval's states are its
     neighbours' ends, so tightening it alone moves the overshoot next door.
@@ -327,7 +327,7 @@ def _points(length: float, *sets: np.ndarray) -> np.ndarray:
 def _grid(path: IdealPath, joint_path: JointPath, knots: np.ndarray,
           tool: ToolLimits) -> np.ndarray:
     """
-    The grid: every knot, each piece cut into equal intervals (module docstring's rule).
+    Cut every piece between knots into equal intervals (the module docstring's rule).
 
     The bend of a piece is ``max|d²/ds²| / max|d/ds|`` of the joints (and of the tool
     point where a tool limit is finite) at its start, middle and end.
@@ -353,5 +353,5 @@ def _grid(path: IdealPath, joint_path: JointPath, knots: np.ndarray,
         np.ceil(BASE_INTERVALS * lengths / knots[-1]).astype(int),
         np.ceil(lengths * bend / BEND_STEP).astype(int)])
     pieces = [np.linspace(start, end, count + 1)[:-1]
-              for start, end, count in zip(starts, ends, counts.tolist())]
+              for start, end, count in zip(starts, ends, counts.tolist(), strict=True)]
     return np.concatenate(pieces + [knots[-1:]])

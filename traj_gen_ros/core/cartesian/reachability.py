@@ -46,7 +46,7 @@ def time_optimal_squared_speed(stages: Stages) -> np.ndarray:
 def _rows(mask: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray, reach: np.ndarray,
           lowest: bool) -> tuple[np.ndarray, ...]:
     """
-    The rows of one sign whose bound of ``u`` can be the tightest somewhere on ``[0, reach]``.
+    Keep the rows of one sign whose bound of ``u`` may be the tightest on ``[0, reach]``.
 
     ``(valid, a, b, c)``, compacted. Each row bounds ``u`` by the line ``(c - b x) / a``;
     a line that another one is tighter than at both ``x = 0`` and ``x = reach`` (for
@@ -90,7 +90,7 @@ def _static_tops(stages: Stages, upper: tuple[np.ndarray, ...], lower: tuple[np.
     # The lower rows and x_{i+1} >= 0 as -2Δ u - x <= 0.
     rest = (np.ones_like(twice, dtype=bool), -twice, -np.ones_like(twice), np.zeros_like(twice))
     low_valid, al, bl, cl = (np.concatenate([array, extra[:, None]], axis=1)[:, None]
-                             for array, extra in zip(lower, rest))
+                             for array, extra in zip(lower, rest, strict=True))
     slope = ak * bl - al * bk
     pairs = np.where(up_valid & low_valid & (slope > 0.0),
                      (ak * cl - al * ck) / slope, np.inf)
@@ -103,7 +103,7 @@ def _static_tops(stages: Stages, upper: tuple[np.ndarray, ...], lower: tuple[np.
 def _backward_lines(lower: tuple[np.ndarray, ...], tops: np.ndarray, twice: np.ndarray
                     ) -> tuple[list[list[float]], list[list[float]]]:
     """
-    The rows with ``a < 0`` as ``x_i <= P + Q K_{i+1}``, without those never the lowest.
+    Write the rows with ``a < 0`` as ``x_i <= P + Q K_{i+1}``, but those never lowest.
 
     ``P = 2Δ c / E``, ``Q = -a / E`` with ``E = 2Δ b - a > 0`` (else the row bounds
     nothing); only lines that may be the lowest for ``K_{i+1}`` in ``[0, S_{i+1}]`` and
@@ -123,7 +123,7 @@ def _backward_lines(lower: tuple[np.ndarray, ...], tops: np.ndarray, twice: np.n
 def _forward_lines(upper: tuple[np.ndarray, ...], tops: np.ndarray, twice: np.ndarray
                    ) -> tuple[list[list[float]], list[list[float]]]:
     """
-    The rows with ``a > 0`` as ``u <= α + β x_i``, ``α = c / a``, ``β = -b / a``.
+    Write the rows with ``a > 0`` as ``u <= α + β x_i``, ``α = c / a``, ``β = -b / a``.
 
     A line above ``(S_{i+1} - x) / 2Δ`` on all of ``[0, S_i]`` never bounds ``u`` more than
     the next point's bound does: it is left out.
@@ -167,7 +167,7 @@ def _backward(tops: np.ndarray, offsets: list[list[float]], gains: list[list[flo
     top = controllable[-1]
     for index in range(len(static) - 2, -1, -1):
         best = static[index]
-        for offset, gain in zip(offsets[index], gains[index]):
+        for offset, gain in zip(offsets[index], gains[index], strict=True):
             value = offset + gain * top
             if value < best:
                 best = value
@@ -183,7 +183,7 @@ def _forward(controllable: list[float], twice: list[float], offsets: list[list[f
     x = 0.0
     for index, step in enumerate(twice):
         reach = controllable[index + 1]
-        for offset, slope in zip(offsets[index], slopes[index]):
+        for offset, slope in zip(offsets[index], slopes[index], strict=True):
             value = x + step * (offset + slope * x)
             if value < reach:
                 reach = value
