@@ -33,6 +33,12 @@ import numpy as np
 from traj_gen_ros.core.cartesian.samples import IdealPath, JointPath
 from traj_gen_ros.core.trajectory import Trajectory
 
+#: Intervals of the whole path's grid, shared among its pieces by length.
+BASE_INTERVALS = 200
+#: The fewest intervals of a piece between two knots.
+PIECE_INTERVALS = 8
+#: The largest change, relative, of the path's derivatives over one interval.
+BEND_STEP = 0.01
 #: Edges of the polygon inscribed in the half disc of the tool's acceleration (even: the
 #: tangent and the normal directions are vertices).
 TOOL_EDGES = 24
@@ -151,18 +157,81 @@ def joint_states(joints: Trajectory, s: np.ndarray, side: str
     return states[0], states[1], states[2]
 
 
-def sample_grid(path: IdealPath, joint_path: JointPath, s: np.ndarray,
-                stop: np.ndarray) -> PathGrid:
-    """Sample the tool path and the joint path at the grid ``s`` (both sides at knots)."""
-    joints = joint_path.joints
-    q, dq_right, ddq_right = joint_states(joints, s, 'right')
-    _, dq_left, ddq_left = joint_states(joints, s, 'left')
-    tool = [_tool_terms(path.sample(s, side)) for side in ('right', 'left')]
+def path_grid(path: IdealPath, joint_path: JointPath, tool_limited: bool) -> PathGrid:
+    """
+    Choose the grid (every knot and stop among it) and sample both paths there.
+
+    Each piece between knots gets its share of :data:`BASE_INTERVALS` by length, at least
+    :data:`PIECE_INTERVALS`, and one interval per :data:`BEND_STEP` of ``ℓ · bend``, the
+    bend being ``max|d²/ds²| / max|d/ds|`` of the joints (and, where ``tool_limited``, of
+    the tool point) at the piece's start, middle and end. A constraint held at both ends
+    of an interval with ``s̈`` constant loses time in proportion to how much its
+    coefficients change over it; these steps keep the duration within 1 % of the optimum
+    (the tests compare it with a 10,000-point phase-plane integration).
+    """
+    length = float(path.length)
+    stops = _merged(length, path.stops, joint_path.stops)
+    knots = _merged(length, path.knots, joint_path.knots, stops)
+    s = _cut(path, joint_path, knots, tool_limited)
+    return _sampled(path, joint_path, s, _nearest(s, knots), _nearest(s, stops))
+
+
+def _merged(length: float, *sets: np.ndarray) -> np.ndarray:
+    """Merge sorted ``s`` values (knots or stops) with 0 and ``length``, near ones as one."""
+    merged = np.sort(np.concatenate([[0.0, length], *[np.asarray(v, float) for v in sets]]))
+    merged = np.clip(merged, 0.0, length)
+    merged = merged[np.concatenate([[True], np.diff(merged) > 1e-12 * length])]
+    merged[-1] = length
+    return merged
+
+
+def _nearest(s: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Return the index of the grid point nearest each of ``values``."""
+    index = np.clip(np.searchsorted(s, values), 1, len(s) - 1)
+    return np.where(values - s[index - 1] < s[index] - values, index - 1, index)
+
+
+def _cut(path: IdealPath, joint_path: JointPath, knots: np.ndarray, tool_limited: bool
+         ) -> np.ndarray:
+    """Cut every piece between knots into equal intervals (:func:`path_grid`'s rule)."""
+    starts, ends = knots[:-1], knots[1:]
+    lengths = ends - starts
+    probe = np.stack([starts, 0.5 * (starts + ends), ends], axis=1)
+    bend = np.zeros(len(lengths))
+    for column, side in enumerate(('right', 'right', 'left')):
+        _, dq, ddq = joint_states(joint_path.joints, probe[:, column], side)
+        rate = np.abs(dq).max(axis=1)
+        bend = np.fmax(bend, np.abs(ddq).max(axis=1) / np.where(rate > 0.0, rate, np.inf))
+        if tool_limited:
+            samples = path.sample(probe[:, column], side)
+            speed = np.linalg.norm(samples.velocity, axis=1)
+            turn = np.linalg.norm(samples.acceleration, axis=1)
+            bend = np.fmax(bend, turn / np.where(speed > 0.0, speed, np.inf))
+    counts = np.maximum.reduce([
+        np.full(len(lengths), PIECE_INTERVALS),
+        np.ceil(BASE_INTERVALS * lengths / knots[-1]).astype(int),
+        np.ceil(lengths * bend / BEND_STEP).astype(int)])
+    pieces = [np.linspace(start, end, count + 1)[:-1]
+              for start, end, count in zip(starts, ends, counts.tolist(), strict=True)]
+    return np.concatenate(pieces + [knots[-1:]])
+
+
+def _sampled(path: IdealPath, joint_path: JointPath, s: np.ndarray, knots: np.ndarray,
+             stops: np.ndarray) -> PathGrid:
+    """Sample both paths at the grid ``s``; the left side differs only at the ``knots``."""
+    q, dq_right, ddq_right = joint_states(joint_path.joints, s, 'right')
+    _, dq_left, ddq_left = joint_states(joint_path.joints, s, 'left')
+    right = _tool_terms(path.sample(s, 'right'))
+    left = [terms.copy() for terms in right]
+    for terms, at_knots in zip(left, _tool_terms(path.sample(s[knots], 'left')), strict=True):
+        terms[knots] = at_knots
+    stop = np.zeros(len(s), dtype=bool)
+    stop[stops] = True
     return PathGrid(
         s=s, stop=stop, q=q,
         dq=np.stack([dq_right[:-1], dq_left[1:]]),
         ddq=np.stack([ddq_right[:-1], ddq_left[1:]]),
-        **{name: np.stack([tool[0][index][:-1], tool[1][index][1:]])
+        **{name: np.stack([right[index][:-1], left[index][1:]])
            for index, name in enumerate(('tangent', 'along', 'across', 'turn'))})
 
 

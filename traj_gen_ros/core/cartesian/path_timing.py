@@ -11,13 +11,8 @@ are tightened and the path is timed again, so no plan above a limit is returned.
 limits are checked on the path parameter ``s(t)`` at three points inside every interval
 (a sampled check: the constraints hold exactly at the grid points).
 
-The grid has every knot; each piece between knots gets its share of
-:data:`BASE_INTERVALS`, at least :data:`PIECE_INTERVALS`, and more where the path bends:
-one interval per :data:`BEND_STEP` of ``ℓ · max|d²/ds²| / max|d/ds|`` of the joints and
-the tool. A constraint held at both ends of an interval with ``s̈`` constant loses time
-in proportion to how much its coefficients change over it; with these steps the duration
-is within 1 % of the optimum (the tests compare it with a 10,000-point phase-plane
-integration).
+The grid (:func:`.path_constraints.path_grid`) has every knot and is cut finer where the
+path bends; the duration is within 1 % of the optimum.
 """
 
 from __future__ import annotations
@@ -31,9 +26,8 @@ from traj_gen_ros.core import validation
 from traj_gen_ros.core.cartesian.bound_report import active_bounds, Bound, describe
 from traj_gen_ros.core.cartesian.path_constraints import (
     assemble,
-    joint_states,
+    path_grid,
     PathGrid,
-    sample_grid,
     ToolLimits,
 )
 from traj_gen_ros.core.cartesian.reachability import time_optimal_squared_speed
@@ -47,12 +41,6 @@ from traj_gen_ros.core.validation import ArrayLike
 
 __all__ = ['Bound', 'TimedPath', 'ToolLimits', 'time_path']
 
-#: Intervals of the whole path's grid, shared among its pieces by length.
-BASE_INTERVALS = 200
-#: The fewest intervals of a piece between two knots.
-PIECE_INTERVALS = 8
-#: The largest change, relative, of the path's derivatives over one interval.
-BEND_STEP = 0.01
 #: Rounds of tightening a quintic's overshoot before the whole plan is slowed instead.
 TIGHTENING_ROUNDS = 6
 #: ``peak / limit`` above which a piece is tightened (inside the core's tolerance).
@@ -135,14 +123,10 @@ def time_path(
                                         joints=names)
     if not isinstance(tool, ToolLimits):
         raise ValueError(f'tool must be ToolLimits, got {type(tool).__name__}')
-    length = _length(path, joint_path)
-    knots = _points(length, path.knots, joint_path.knots)
-    stops = _points(length, path.stops, joint_path.stops)
-    s = _grid(path, joint_path, knots, tool)
-    stop = np.zeros(len(s), dtype=bool)
-    stop[np.searchsorted(s, stops)] = True
-    grid = sample_grid(path, joint_path, s, stop)
-    return _timed(path, grid, velocity, acceleration, tool.as_array(), names)
+    _check_lengths(path, joint_path)
+    limits = tool.as_array()
+    grid = path_grid(path, joint_path, tool_limited=bool(np.isfinite(limits).any()))
+    return _timed(path, grid, velocity, acceleration, limits, names)
 
 
 def _timed(path: IdealPath, grid: PathGrid, velocity: np.ndarray, acceleration: np.ndarray,
@@ -303,55 +287,11 @@ def _joint_names(joint_names: Sequence[str] | None, joint_count: int
     return names
 
 
-def _length(path: IdealPath, joint_path: JointPath) -> float:
-    """Return the path's length, checking that the joint path covers the same one."""
+def _check_lengths(path: IdealPath, joint_path: JointPath) -> None:
+    """Refuse a path of no length, or a joint path of another length."""
     length = float(path.length)
     if not (math.isfinite(length) and length > 0.0):
         raise ValueError(f'the path length must be finite and > 0, got {length}')
     if abs(float(joint_path.length) - length) > 1e-9 * length:
         raise ValueError(f'the joint path is {joint_path.length} long but the tool path '
                          f'{length}: they must be the same path')
-    return length
-
-
-def _points(length: float, *sets: np.ndarray) -> np.ndarray:
-    """Merge sorted ``s`` values (knots or stops) with 0 and ``length``, near ones as one."""
-    merged = np.sort(np.concatenate([[0.0, length], *[np.asarray(v, float) for v in sets]]))
-    merged = np.clip(merged, 0.0, length)
-    keep = np.concatenate([[True], np.diff(merged) > 1e-12 * length])
-    merged = merged[keep]
-    merged[-1] = length
-    return merged
-
-
-def _grid(path: IdealPath, joint_path: JointPath, knots: np.ndarray,
-          tool: ToolLimits) -> np.ndarray:
-    """
-    Cut every piece between knots into equal intervals (the module docstring's rule).
-
-    The bend of a piece is ``max|d²/ds²| / max|d/ds|`` of the joints (and of the tool
-    point where a tool limit is finite) at its start, middle and end.
-    """
-    starts, ends = knots[:-1], knots[1:]
-    lengths = ends - starts
-    probe = np.stack([starts, 0.5 * (starts + ends), ends], axis=1)
-    sides = np.array(['right', 'right', 'left'])
-    bend = np.zeros(len(lengths))
-    for column, side in enumerate(sides):
-        _, dq, ddq = joint_states(joint_path.joints, probe[:, column], side)
-        with np.errstate(divide='ignore', invalid='ignore'):
-            joint_bend = np.abs(ddq).max(axis=1) / np.abs(dq).max(axis=1)
-        bend = np.fmax(bend, np.where(np.isfinite(joint_bend), joint_bend, 0.0))
-        if np.isfinite(tool.as_array()).any():
-            samples = path.sample(probe[:, column], side)
-            speed = np.linalg.norm(samples.velocity, axis=1)
-            turn = np.linalg.norm(samples.acceleration, axis=1)
-            with np.errstate(divide='ignore', invalid='ignore'):
-                bend = np.fmax(bend, np.where(speed > 0.0, turn / speed, 0.0))
-    counts = np.maximum.reduce([
-        np.full(len(lengths), PIECE_INTERVALS),
-        np.ceil(BASE_INTERVALS * lengths / knots[-1]).astype(int),
-        np.ceil(lengths * bend / BEND_STEP).astype(int)])
-    pieces = [np.linspace(start, end, count + 1)[:-1]
-              for start, end, count in zip(starts, ends, counts.tolist(), strict=True)]
-    return np.concatenate(pieces + [knots[-1:]])
