@@ -28,6 +28,7 @@ from traj_gen_ros.core.cartesian.path_constraints import (
     assemble,
     path_grid,
     PathGrid,
+    Stages,
     ToolLimits,
 )
 from traj_gen_ros.core.cartesian.reachability import time_optimal_squared_speed
@@ -169,7 +170,7 @@ def _timed(path: IdealPath, grid: PathGrid, velocity: np.ndarray, acceleration: 
                      active_bounds(grid, x, u, velocity, acceleration, tool), names)
 
 
-def _squared_speed(stages: object, grid: PathGrid) -> np.ndarray:
+def _squared_speed(stages: Stages, grid: PathGrid) -> np.ndarray:
     """Return ``ṡ²`` at the grid, refusing a point between stops that cannot be moved."""
     x = time_optimal_squared_speed(stages)
     moving = ~grid.stop
