@@ -170,13 +170,13 @@ def path_grid(path: IdealPath, joint_path: JointPath, tool_limited: bool) -> Pat
     (the tests compare it with a 10,000-point phase-plane integration).
     """
     length = float(path.length)
-    stops = _merged(length, path.stops, joint_path.stops)
-    knots = _merged(length, path.knots, joint_path.knots, stops)
+    stops = merge_values(length, path.stops, joint_path.stops)
+    knots = merge_values(length, path.knots, joint_path.knots, stops)
     s = _cut(path, joint_path, knots, tool_limited)
-    return _sampled(path, joint_path, s, _nearest(s, knots), _nearest(s, stops))
+    return sample_grid(path, joint_path, s, nearest_points(s, knots), nearest_points(s, stops))
 
 
-def _merged(length: float, *sets: np.ndarray) -> np.ndarray:
+def merge_values(length: float, *sets: np.ndarray) -> np.ndarray:
     """Merge sorted ``s`` values (knots or stops) with 0 and ``length``, near ones as one."""
     merged = np.sort(np.concatenate([[0.0, length], *[np.asarray(v, float) for v in sets]]))
     merged = np.clip(merged, 0.0, length)
@@ -185,7 +185,7 @@ def _merged(length: float, *sets: np.ndarray) -> np.ndarray:
     return merged
 
 
-def _nearest(s: np.ndarray, values: np.ndarray) -> np.ndarray:
+def nearest_points(s: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Return the index of the grid point nearest each of ``values``."""
     index = np.clip(np.searchsorted(s, values), 1, len(s) - 1)
     return np.where(values - s[index - 1] < s[index] - values, index - 1, index)
@@ -216,7 +216,7 @@ def _cut(path: IdealPath, joint_path: JointPath, knots: np.ndarray, tool_limited
     return np.concatenate(pieces + [knots[-1:]])
 
 
-def _sampled(path: IdealPath, joint_path: JointPath, s: np.ndarray, knots: np.ndarray,
+def sample_grid(path: IdealPath, joint_path: JointPath, s: np.ndarray, knots: np.ndarray,
              stops: np.ndarray) -> PathGrid:
     """Sample both paths at the grid ``s``; the left side differs only at the ``knots``."""
     q, dq_right, ddq_right = joint_states(joint_path.joints, s, 'right')

@@ -142,8 +142,8 @@ def _timed(path: IdealPath, grid: PathGrid, velocity: np.ndarray, acceleration: 
         stages = assemble(grid, point_velocity, interval_acceleration, tool_speed,
                           tool_acceleration)
         x = _squared_speed(stages, grid)
-        u, times = _motion(grid, x)
-        trajectory = _joint_trajectory(grid, x, u, times)
+        u, times = grid_motion(grid, x)
+        trajectory = joint_trajectory(grid, x, u, times)
         tool_ratios = _tool_ratios(path, grid, x, u, tool)  # (n, 3)
         over_tool = tool_ratios > 1.0 + _SLACK
         violation = limit_violation(trajectory, velocity, acceleration)
@@ -162,7 +162,7 @@ def _timed(path: IdealPath, grid: PathGrid, velocity: np.ndarray, acceleration: 
                       float(tool_ratios[:, [0, 2]].max(initial=0.0)),
                       math.sqrt(tool_ratios[:, 1].max(initial=0.0)), 1.0) * _MARGIN
         x, u, times = x / stretch ** 2, u / stretch ** 2, times * stretch
-        trajectory = _joint_trajectory(grid, x, u, times)
+        trajectory = joint_trajectory(grid, x, u, times)
         violation = limit_violation(trajectory, velocity, acceleration)
     if violation is not None:  # cannot happen: slowed down by the exact peak ratios
         raise RuntimeError(f'time_path: {violation.describe(names)}')
@@ -185,7 +185,7 @@ def _squared_speed(stages: Stages, grid: PathGrid) -> np.ndarray:
     return x
 
 
-def _motion(grid: PathGrid, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def grid_motion(grid: PathGrid, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return ``s̈`` per interval and the grid times: ``Δt = 2Δ / (ṡ_i + ṡ_{i+1})``."""
     delta = grid.delta
     speed = np.sqrt(x)
@@ -194,7 +194,7 @@ def _motion(grid: PathGrid, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return (x[1:] - x[:-1]) / (2.0 * delta), times
 
 
-def _joint_trajectory(grid: PathGrid, x: np.ndarray, u: np.ndarray, times: np.ndarray
+def joint_trajectory(grid: PathGrid, x: np.ndarray, u: np.ndarray, times: np.ndarray
                       ) -> Trajectory:
     """One quintic per interval from ``q``, ``q' ṡ`` and each side's ``q' s̈ + q'' ṡ²``."""
     rate = np.empty_like(grid.q)
