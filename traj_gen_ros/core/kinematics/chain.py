@@ -51,6 +51,28 @@ def _check_joints(tree: UrdfTree, joints: Sequence[str]) -> tuple[str, ...]:
     return joints
 
 
+def _relative_rate(tool_rate: np.ndarray, tool: np.ndarray, base_rate: np.ndarray,
+                   base: np.ndarray, lever: np.ndarray, rate: np.ndarray) -> np.ndarray:
+    """
+    Return ``Ṁ − [ω_b]× M`` (world axes) of the tool's Jacobian relative to a moving base.
+
+    ``M = (J_t − J_b + [r]× J_b^ω, J_t^ω − J_b^ω)`` from the tool's and the base's world
+    Jacobians ``tool``, ``base`` and their time derivatives ``tool_rate``, ``base_rate`` at
+    joint velocity ``rate``; ``r`` the lever from the base's origin to the tool's, ``ṙ =
+    v_t − v_b``, ``ω_b = J_b^ω rate``.
+    """
+    spin = base[3:] @ rate
+    moved = tool - base
+    moved[:3] += np.cross(lever, base[3:], axisb=0, axisc=0)
+    result = tool_rate - base_rate
+    result[:3] += (np.cross(moved[:3] @ rate - np.cross(lever, spin), base[3:], axisb=0,
+                            axisc=0)
+                   + np.cross(lever, base_rate[3:], axisb=0, axisc=0))
+    result[:3] -= np.cross(spin, moved[:3], axisb=0, axisc=0)
+    result[3:] -= np.cross(spin, moved[3:], axisb=0, axisc=0)
+    return result
+
+
 def _frozen(values: Any) -> np.ndarray:
     array = np.array(values)
     array.setflags(write=False)
@@ -254,6 +276,12 @@ class Chain:
         return (relative.rotation, relative.translation,
                 np.vstack((rotation_t @ jacobian[:3], rotation_t @ jacobian[3:])))
 
+    def _one(self, q: Sequence[float] | np.ndarray, taker: str, what: str = 'q') -> np.ndarray:
+        q = self._values(q, what)
+        if q.ndim != 1:
+            raise ValueError(f'{what} has shape {q.shape}: {taker} takes ({len(self.joints)},)')
+        return q
+
     def jacobian(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
         """
         Return the tool's Jacobian at ``(joints,)`` positions ``q``: ``(6, joints)``.
@@ -261,10 +289,53 @@ class Chain:
         Rows: the velocity of the ``tool_frame`` origin (m/s), then its angular velocity
         (rad/s), both relative to ``base_frame`` and in its axes, per unit joint velocity.
         """
-        q = self._values(q)
-        if q.ndim != 1:
-            raise ValueError(f'q has shape {q.shape}: the Jacobian takes ({len(self.joints)},)')
-        return self._pose_and_jacobian(q)[2]
+        return self._pose_and_jacobian(self._one(q, 'the Jacobian'))[2]
+
+    def pose_and_jacobian(self, q: Sequence[float] | np.ndarray
+                          ) -> tuple[np.ndarray, np.ndarray]:
+        """
+        Return the tool's pose ``(4, 4)`` and Jacobian ``(6, joints)`` at ``q``, in one pass.
+
+        :meth:`forward` and :meth:`jacobian` together, for callers that need both at every
+        step (the joint path of a tool path, :mod:`traj_gen_ros.core.cartesian`).
+        """
+        rotation, translation, jacobian = self._pose_and_jacobian(
+            self._one(q, 'pose_and_jacobian'))
+        pose = np.eye(4)
+        pose[:3, :3], pose[:3, 3] = rotation, translation
+        return pose, jacobian
+
+    def jacobian_rate(self, q: Sequence[float] | np.ndarray,
+                      rate: Sequence[float] | np.ndarray) -> np.ndarray:
+        """
+        Return ``J̇``, the time derivative of :meth:`jacobian` at joint velocity ``rate``.
+
+        ``(6, joints)``, along ``q + t·rate``: the tool's acceleration is ``J q̈ + J̇ q̇``
+        (``J̇ q̇`` the drift), and a minimum-norm joint path's curvature needs ``J̇ᵀ`` too.
+        Pinocchio's ``getFrameJacobianTimeVariation`` (``LOCAL_WORLD_ALIGNED``). For a
+        ``base_frame`` that the joints move, the chain's ``J = R_bᵀ M`` with ``M = (J_t − J_b
+        + [r]× J_b^ω, J_t^ω − J_b^ω)`` (``r`` from the base's origin to the tool's)
+        differentiates to ``R_bᵀ (Ṁ − [ω_b]× M)``, ``ṙ = v_t − v_b``.
+        """
+        q, rate = self._one(q, 'jacobian_rate'), self._one(rate, 'jacobian_rate', 'rate')
+        pin, model, data, frame = self._pin, self._model, self._data, self._world_aligned
+        selection = self._configuration.selection
+        pin.computeJointJacobiansTimeVariation(model, data, self._configuration.config(q),
+                                               selection @ rate)
+        tool = pin.getFrameJacobianTimeVariation(model, data, self._tool, frame) @ selection
+        if self._base_is_world:
+            return tool
+        base = pin.updateFramePlacement(model, data, self._base)
+        if self._base_moves:
+            tool_origin = pin.updateFramePlacement(model, data, self._tool).translation
+            lever = tool_origin - base.translation
+            of_tool = pin.getFrameJacobian(model, data, self._tool, frame) @ selection
+            of_base = pin.getFrameJacobian(model, data, self._base, frame) @ selection
+            turning = pin.getFrameJacobianTimeVariation(model, data, self._base,
+                                                        frame) @ selection
+            tool = _relative_rate(tool, of_tool, turning, of_base, lever, rate)
+        rotation_t = base.rotation.T
+        return np.vstack((rotation_t @ tool[:3], rotation_t @ tool[3:]))
 
     def _tool_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         placement = self._placement(self._configuration.config(q), self._tool)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import NamedTuple, Protocol
 
 import numpy as np
 from traj_gen_ros.core.timing import hold
@@ -28,6 +28,13 @@ class State(NamedTuple):
     acceleration: np.ndarray
 
 
+class BrakesAlong(Protocol):
+    """A plan that brakes along its own path (a line, an arc): the tool stays on it."""
+
+    def brake(self, elapsed: float, velocity: np.ndarray) -> Trajectory | None:
+        """Brake from ``elapsed`` s into the plan at joint ``velocity``; None: not here."""
+
+
 @dataclass(frozen=True)
 class PlannedMotion:
     """
@@ -38,6 +45,7 @@ class PlannedMotion:
     time advances at the factor (:mod:`traj_gen_ros.node.speed.time_map`).
     ``tool_poses``: a line's or an arc's planned tool path, ``(knots, 4, 4)`` in
     ``base_frame`` (m), published on ``~/tool_path``; None for joint-space plans.
+    ``along``: how a line or an arc brakes along its path (``~/stop``); None: each joint.
     """
 
     plan: Trajectory
@@ -46,6 +54,7 @@ class PlannedMotion:
     note: str = ''
     unscaled: bool = False
     tool_poses: np.ndarray | None = None
+    along: BrakesAlong | None = None
 
 
 def held(position: Sequence[float], profile: str = 'hold', note: str = '') -> PlannedMotion:

@@ -126,20 +126,27 @@ VIA: Steps[ViaRequest] = Steps(plan=plan_via, unwrap=unwrap_each_point)
 _OWN_STEPS = {GoalRequest: GOAL, ViaRequest: VIA}
 
 
-def plan_stop(config: Config, state: State) -> PlannedMotion:
+def plan_stop(config: Config, state: State,
+              running: tuple[PlannedMotion, float] | None = None) -> PlannedMotion:
     """
     Brake from ``state`` to rest within ``max_acceleration`` (rad/s²), then hold.
 
-    With profile ``scurve`` the jerk stays within ``max_jerk`` (rad/s³) and the
-    acceleration is continuous from the state's (:func:`traj_gen_ros.core.jerk_limited.brake`);
-    the other profiles brake at ``max_acceleration`` at once (:func:`traj_gen_ros.brake`).
-    ``state`` is the commanded state (the speed scaling factor applied): the brake is
-    ``unscaled`` and runs on the node clock.
+    A line or an arc (``running``: the motion in effect and its own time, s) brakes along
+    its path, the tool kept on it (:class:`~traj_gen_ros.node.planning.motion.BrakesAlong`).
+    Every other motion brakes each joint: with profile ``scurve`` the jerk stays within
+    ``max_jerk`` (rad/s³) and the acceleration is continuous from the state's
+    (:func:`traj_gen_ros.core.jerk_limited.brake`); the other profiles brake at
+    ``max_acceleration`` at once (:func:`traj_gen_ros.brake`). ``state`` is the commanded
+    state (the speed scaling factor applied): the brake is ``unscaled`` and runs on the
+    node clock.
     """
-    if config.profile == 'scurve':
+    plan = None
+    if running is not None and running[0].along is not None:
+        plan = running[0].along.brake(running[1], state.velocity)
+    if plan is None and config.profile == 'scurve':
         plan = scurve_brake(state.position, state.velocity, state.acceleration,
                             config.max_acceleration, config.max_jerk)
-    else:
+    elif plan is None:
         plan = brake(state.position, state.velocity, config.max_acceleration)
     # Never slowed by the speed scaling factor: it brakes at full authority.
     return PlannedMotion(plan, 'stop', plan.sample(plan.duration)[0][0], unscaled=True)

@@ -20,8 +20,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from traj_gen_ros.core.cartesian.joint_path import follow
+from traj_gen_ros.core.cartesian.path_brake import brake_along
 from traj_gen_ros.core.cartesian.path_refusal import PathRefusal
-from traj_gen_ros.core.cartesian.path_timing import time_path, ToolLimits
+from traj_gen_ros.core.cartesian.path_timing import time_path, TimedPath, ToolLimits
 from traj_gen_ros.core.cartesian.samples import IdealPath, JointPath
 from traj_gen_ros.core.cartesian.tool_path import circular_path, straight_path
 from traj_gen_ros.core.sequences import concatenate
@@ -107,6 +108,48 @@ def joint_path_request(config: Config, request: ToolPathRequest, state: State
                             request.kind)
 
 
+@dataclass(frozen=True)
+class AlongPath:
+    """
+    How a planned line or arc brakes along its path (``~/stop``, a lost measured state).
+
+    ``offset`` (s) is when the path starts in the plan (after the brake to rest before
+    it); ``timed`` its timing; the limits those it was planned with.
+    """
+
+    tool_path: IdealPath
+    joint_path: JointPath
+    timed: TimedPath
+    offset: float
+    max_velocity: np.ndarray
+    max_acceleration: np.ndarray
+    tool: ToolLimits
+
+    def brake(self, elapsed: float, velocity: np.ndarray) -> Trajectory | None:
+        """
+        Brake from ``elapsed`` s into the plan at joint ``velocity`` (rad/s), along the path.
+
+        The commanded path speed is ``velocity``'s along ``q'(s)`` (the speed override
+        scales ``ṡ``). None where the plan is not on its path then (before it, at its end,
+        at rest): the caller brakes each joint.
+        """
+        local = elapsed - self.offset
+        if not 0.0 <= local < self.timed.duration:
+            return None
+        s, _ = self.timed.path_parameter(local)
+        rate = self.joint_path.joints.sample(float(s))[1][0]
+        norm = float(rate @ rate)
+        speed = float(rate @ velocity) / norm if norm > 0.0 else 0.0
+        if speed <= 0.0:
+            return None
+        try:
+            plan, _ = brake_along(self.tool_path, self.joint_path, self.max_velocity,
+                                  self.max_acceleration, self.tool, float(s), speed)
+        except ValueError:
+            return None
+        return plan
+
+
 def _timed(config: Config, state: State, hold_at: np.ndarray, request: JointPathRequest
            ) -> PlannedMotion:
     """Time the joint path under the joint and tool limits; the brake first, one plan."""
@@ -118,9 +161,11 @@ def _timed(config: Config, state: State, hold_at: np.ndarray, request: JointPath
     plan = concatenate([request.brake, timed.trajectory])
     end = plan.sample(plan.duration)[0][0]
     knots = request.joint_path.joints.breakpoints
+    along = AlongPath(request.tool_path, request.joint_path, timed, request.brake.duration,
+                      config.max_velocity, config.max_acceleration, tool)
     return PlannedMotion(plan, PROFILE[request.kind], end,
                          f'speed bounded by {timed.describe(config.joints)}',
-                         tool_poses=request.tool_path.sample(knots).poses())
+                         tool_poses=request.tool_path.sample(knots).poses(), along=along)
 
 
 def _as_planned(start: np.ndarray, request: JointPathRequest, mask: np.ndarray

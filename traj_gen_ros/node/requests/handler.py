@@ -233,7 +233,7 @@ class RequestHandler:
             start_ns = self._stream.next_start()
             state, _ = self._stream.start_state(start_ns, scaled=False)
             try:
-                motion = plan_stop(config, state)
+                motion = plan_stop(config, state, self._stream.running_at(start_ns))
             except ValueError as error:  # a non-finite state: the stream holds its last
                 self._log_error(f'braking failed: {error!r}')
                 return
@@ -284,10 +284,11 @@ class RequestHandler:
         return response
 
 
-def _brake(config: Config, state: State, hold_at: np.ndarray, parsed: None) -> PlannedMotion:
-    """Plan ``~/stop``: brake from ``state`` to rest (:func:`plan_stop`)."""
-    del hold_at, parsed  # a stop ends where braking ends
-    return plan_stop(config, state)
+def _brake(config: Config, state: State, hold_at: np.ndarray,
+           running: tuple[PlannedMotion, float]) -> PlannedMotion:
+    """Plan ``~/stop``: brake from ``state`` to rest (:func:`plan_stop`), along a path."""
+    del hold_at  # a stop ends where braking ends
+    return plan_stop(config, state, running)
 
 
 #: Every request that moves somewhere: the one pipeline

@@ -57,7 +57,9 @@ class Planner:
 
     plan: Callable[[Config, State, np.ndarray, object], PlannedMotion]
     #: Plans from the commanded state (the speed scaling factor applied) and is never
-    #: slowed (``PlannedMotion.unscaled``): a brake, at full authority.
+    #: slowed (``PlannedMotion.unscaled``): a brake, at full authority. It is given the
+    #: motion in effect at the start and its own time there (``Stream.running_at``) in
+    #: place of ``parsed``: a line or an arc brakes along its path.
     commanded: bool = False
 
 
@@ -111,8 +113,10 @@ class StartTick:
             # A brake plans from the commanded state, the rest from the plan's own (speed
             # scaling: docs/node.md).
             state, hold_at = self._stream.start_state(start_ns, scaled=not planner.commanded)
+            parsed = (self._stream.running_at(start_ns) if planner.commanded
+                      else request.parsed)
             try:
-                motion = planner.plan(config, state, hold_at, request.parsed)
+                motion = planner.plan(config, state, hold_at, parsed)
             except RequestError as error:
                 self._answers.refused(request, str(error))
                 return None

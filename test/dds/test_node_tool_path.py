@@ -1,0 +1,236 @@
+"""
+Lines and arcs of the tool over DDS (issue 30), on pybullet's Franka Panda.
+
+Every check is made on the streamed joint states, through an independent forward
+kinematics (``numpy_chain``) and an independent ideal path written here: a straight line
+with orientation by scipy's slerp, by the fraction of the line's length. At every published
+setpoint the tool is within 0.1 mm and 1 mrad of it; no joint exceeds its velocity limit;
+``~/stop`` and the speed override mid-path keep the tool on the line.
+"""
+
+import contextlib
+import json
+from pathlib import Path as FilePath
+import tempfile
+
+from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Path
+from node_harness import Probe, running_node, stamp_ns
+import numpy as np
+from numpy_chain import NumpyChain
+from pybullet_urdfs import pybullet_urdfs
+import pytest
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from scipy.spatial.transform import Rotation, Slerp
+
+JOINTS = [f'panda_joint{index}' for index in range(1, 8)]
+READY = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]
+TOOL = 'panda_grasptarget'
+MAX_VELOCITY = 1.5
+
+
+@pytest.fixture(scope='module')
+def urdf(request) -> str:
+    return pybullet_urdfs(request.config)['panda'].read_text()
+
+
+class PathProbe(Probe):
+    """A Probe that sends tool paths and records ``~/tool_path``."""
+
+    def __init__(self):
+        super().__init__()
+        reliable = ReliabilityPolicy.RELIABLE
+        self.line_pub = self.create_publisher(Path, '/trajectory_generator/cartesian_path', 10)
+        self.arc_pub = self.create_publisher(Path, '/trajectory_generator/circular_goal', 10)
+        self.tool_paths = []
+        self.create_subscription(
+            Path, '/trajectory_generator/tool_path', self.tool_paths.append,
+            QoSProfile(depth=1, reliability=reliable,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL))
+        self.spin_until(lambda: self.line_pub.get_subscription_count() > 0
+                        and self.arc_pub.get_subscription_count() > 0, 20.0,
+                        'the path subscriptions')
+
+    def send(self, poses, frame='', arc=False):
+        """Send ``poses`` (each ``(4, 4)``) as one Path; return the answer on ~/status."""
+        message = Path()
+        message.header.frame_id = frame
+        for pose in poses:
+            stamped = PoseStamped()
+            point, orientation = stamped.pose.position, stamped.pose.orientation
+            point.x, point.y, point.z = (float(v) for v in pose[:3, 3])
+            x, y, z, w = Rotation.from_matrix(pose[:3, :3]).as_quat()
+            orientation.x, orientation.y, orientation.z, orientation.w = x, y, z, w
+            message.poses.append(stamped)
+        publisher = self.arc_pub if arc else self.line_pub
+        return self._next_status(lambda: publisher.publish(message), 20.0)
+
+
+@contextlib.contextmanager
+def session(urdf_text, **extra):
+    """Run a generator for the Panda's joints with its URDF."""
+    values = {'joints': JOINTS, 'initial_positions': READY, 'max_velocity': [MAX_VELOCITY],
+              'max_acceleration': [3.0], 'robot_description': urdf_text} | extra
+    with tempfile.TemporaryDirectory() as folder:
+        path = FilePath(folder) / 'panda.yaml'
+        path.write_text(json.dumps({'/**': {'ros__parameters': values}}))
+        with running_node('--params-file', str(path)) as node:
+            probe = PathProbe()
+            try:
+                probe.wait_ready(30.0)
+                yield node, probe
+            finally:
+                probe.destroy_node()
+
+
+def tool_poses(chain, states):
+    """Return the tool pose of each streamed state, ``(n, 4, 4)``."""
+    return np.array([chain.pose(TOOL, dict(zip(JOINTS, s.position, strict=True)))
+                     for s in states])
+
+
+def line_errors(poses, start, goal):
+    """Return each pose's (distance m, angle rad) from the ideal line ``start`` → ``goal``."""
+    step = goal[:3, 3] - start[:3, 3]
+    fraction = np.clip((poses[:, :3, 3] - start[:3, 3]) @ step / (step @ step), 0.0, 1.0)
+    nearest = start[:3, 3] + fraction[:, None] * step
+    distance = np.linalg.norm(poses[:, :3, 3] - nearest, axis=1)
+    slerp = Slerp([0.0, 1.0], Rotation.from_matrix([start[:3, :3], goal[:3, :3]]))
+    angle = (slerp(fraction).inv() * Rotation.from_matrix(poses[:, :3, :3])).magnitude()
+    return distance, angle
+
+
+def moved(probe, start_ns):
+    """Return the states published since ``start_ns`` until the arm rests again."""
+    probe.wait_at_rest(30.0)
+    return [s for s in probe.states if stamp_ns(s.header.stamp) >= start_ns]
+
+
+def test_a_line_keeps_the_tool_on_it_within_a_tenth_of_a_millimetre(urdf):
+    chain = NumpyChain(urdf)
+    with session(urdf) as (_, probe):
+        position = probe.wait_at_rest(20.0)
+        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        goal = here.copy()
+        goal[:3, 3] += [0.15, 0.1, -0.12]
+        goal[:3, :3] = Rotation.from_rotvec([0.0, 0.0, 0.4]).as_matrix() @ here[:3, :3]
+        sent_ns = stamp_ns(probe.latest().header.stamp)
+        status = probe.send([goal])
+        assert status.level == DiagnosticStatus.OK, status.message
+        assert status.message.startswith('cartesian_path accepted: profile=line'), \
+            status.message
+        values = {kv.key: kv.value for kv in status.values}
+        assert values['request'] == 'cartesian_path' and values['bounded_by']
+        states = moved(probe, sent_ns)
+        poses = tool_poses(chain, states)
+        distance, angle = line_errors(poses, here, goal)
+        assert distance.max() < 1e-4 and angle.max() < 1e-3, (distance.max(), angle.max())
+        end_distance = np.linalg.norm(poses[-1, :3, 3] - goal[:3, 3])
+        assert end_distance < 1e-4
+        velocities = np.array([s.velocity for s in states])
+        assert np.abs(velocities).max() <= MAX_VELOCITY * (1 + 1e-9)
+        probe.spin_until(lambda: probe.tool_paths, 10.0, '~/tool_path')
+        shown = probe.tool_paths[-1]
+        assert shown.header.frame_id == 'panda_link0' and len(shown.poses) >= 2
+        last = shown.poses[-1].pose.position
+        assert np.allclose([last.x, last.y, last.z], goal[:3, 3], atol=1e-6)
+
+
+def test_stop_and_the_speed_override_mid_line_keep_the_tool_on_it(urdf):
+    chain = NumpyChain(urdf)
+    with session(urdf, max_linear_velocity=0.1) as (_, probe):
+        position = probe.wait_at_rest(20.0)
+        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        goal = here.copy()
+        goal[:3, 3] += [0.0, 0.25, 0.0]
+        sent_ns = stamp_ns(probe.latest().header.stamp)
+        assert probe.send([goal]).level == DiagnosticStatus.OK
+        probe.spin_until(lambda: np.linalg.norm(probe.latest().velocity) > 0.05, 10.0,
+                         'the motion')
+        probe.set_parameters(speed_scaling=0.4)
+        count = len(probe.states)
+        probe.spin_until(lambda: len(probe.states) > count + 30, 10.0, 'the slower motion')
+        assert probe.stop().success
+        states = moved(probe, sent_ns)
+        poses = tool_poses(chain, states)
+        distance, angle = line_errors(poses, here, goal)
+        assert distance.max() < 1e-4 and angle.max() < 1e-3, (distance.max(), angle.max())
+        travelled = np.linalg.norm(poses[-1, :3, 3] - here[:3, 3])
+        assert 0.01 < travelled < 0.24  # stopped on the way, on the line
+
+
+def test_a_blended_corner_is_passed_without_stopping_and_an_unblended_one_stops(urdf):
+    chain = NumpyChain(urdf)
+    for radius, stops in ((0.03, False), (0.0, True)):
+        with session(urdf, blend_radius=radius) as (_, probe):
+            position = probe.wait_at_rest(20.0)
+            here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+            corner, goal = here.copy(), here.copy()
+            corner[:3, 3] += [0.1, 0.0, 0.0]
+            goal[:3, 3] += [0.1, 0.1, 0.0]
+            sent_ns = stamp_ns(probe.latest().header.stamp)
+            assert probe.send([corner, goal]).level == DiagnosticStatus.OK
+            states = moved(probe, sent_ns)
+            poses = tool_poses(chain, states)
+            to_corner = np.linalg.norm(poses[:, :3, 3] - corner[:3, 3], axis=1)
+            near = to_corner < 0.03
+            speeds = np.linalg.norm(np.diff(poses[:, :3, 3], axis=0), axis=1)
+            moving = np.flatnonzero(speeds > 1e-7)
+            middle = speeds[moving[0]:moving[-1]]
+            if stops:
+                assert to_corner.min() < 1e-4  # it reaches the corner
+                assert middle.min() < 1e-6  # and rests there
+            else:
+                assert to_corner.min() > 0.003  # it cuts the corner
+                assert middle.min() > 1e-5  # and never rests on the way
+                # Within the blend radius of the corner while it leaves the lines.
+                first, second = line_errors(poses, here, corner)[0], \
+                    line_errors(poses, corner, goal)[0]
+                off = np.minimum(first, second) > 1e-4
+                assert np.all(near[off])
+            assert np.linalg.norm(poses[-1, :3, 3] - goal[:3, 3]) < 1e-4
+
+
+def test_an_arc_passes_through_its_interim_point(urdf):
+    chain = NumpyChain(urdf)
+    with session(urdf) as (_, probe):
+        position = probe.wait_at_rest(20.0)
+        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        interim, goal = here.copy(), here.copy()
+        interim[:3, 3] += [0.08, 0.08, 0.0]
+        goal[:3, 3] += [0.16, 0.0, 0.0]
+        sent_ns = stamp_ns(probe.latest().header.stamp)
+        status = probe.send([interim, goal], arc=True)
+        assert status.level == DiagnosticStatus.OK, status.message
+        assert 'profile=arc' in status.message
+        poses = tool_poses(chain, moved(probe, sent_ns))
+        centre = here[:3, 3] + [0.08, 0.0, 0.0]  # the circle through the three points
+        radius = np.linalg.norm(poses[:, :3, 3] - centre, axis=1)
+        assert np.abs(radius - 0.08).max() < 1e-4
+        assert np.abs(poses[:, 2, 3] - here[2, 3]).max() < 1e-4
+        assert np.linalg.norm(poses[:, :3, 3] - interim[:3, 3], axis=1).min() < 2e-3
+        assert np.linalg.norm(poses[-1, :3, 3] - goal[:3, 3]) < 1e-4
+
+
+def test_paths_that_cannot_be_followed_are_refused_before_any_motion(urdf):
+    chain = NumpyChain(urdf)
+    with session(urdf) as (_, probe):
+        position = probe.wait_at_rest(20.0)
+        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        far = here.copy()
+        far[:3, 3] = [1.5, 0.0, 0.5]
+        status = probe.send([far])
+        assert status.level == DiagnosticStatus.ERROR
+        assert status.message.startswith('cartesian_path refused: '), status.message
+        assert '% of the path' in status.message, status.message
+        line = here.copy()
+        line[:3, 3] += [0.05, 0.0, 0.0]
+        status = probe.send([line, here, line], arc=True)
+        assert status.level == DiagnosticStatus.ERROR and 'exactly two' in status.message
+        status = probe.send([line, line.copy()], arc=True)  # interim and goal coincide
+        assert status.level == DiagnosticStatus.ERROR and '1 mm' in status.message, \
+            status.message
+        status = probe.send([line], frame='no_such_link')
+        assert status.level == DiagnosticStatus.ERROR and 'no_such_link' in status.message
+        assert np.array_equal(probe.wait_at_rest(), position)
