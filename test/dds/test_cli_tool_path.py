@@ -4,20 +4,27 @@ traj-gen line / arc as a user runs them: the Path they publish, the answer, --wa
 A stand-in in the test process (a real rclpy node in node_harness's isolated domain)
 subscribes /trajectory_generator/cartesian_path and circular_goal, answers on ~/status
 (with decoys that are not the answer), latches its plan on ~/trajectory and plays the
-joint states: --wait ends only once they are at rest where that plan ends.
+joint states: --wait ends only once they are at rest where that plan ends. Then the real
+generator, with pybullet's Panda: a line and an arc end on their goals (an independent
+forward kinematics, numpy_chain, of the streamed joints).
 """
 
+import contextlib
 import json
+from pathlib import Path as FilePath
 import subprocess
 import sys
+import tempfile
 import time
 
 from builtin_interfaces.msg import Time
 from cli_helpers import assert_one_line_error
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from nav_msgs.msg import Path
-from node_harness import in_process_node, node_env, REPO
+from node_harness import in_process_node, node_env, Probe, REPO, running_node
 import numpy as np
+from numpy_chain import NumpyChain
+from pybullet_urdfs import pybullet_urdfs
 import pytest
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -167,3 +174,79 @@ def test_line_without_a_node_exits_3_naming_the_topic():
     assert assert_one_line_error(result, code=3) == (
         'traj-gen line: no answer after 1 s: /nobody is not subscribed to '
         '/nobody/cartesian_path (is the node running, with the same ROS_DOMAIN_ID?)')
+
+
+# ---------------------------------------------------------------- the real generator
+
+PANDA = [f'panda_joint{index}' for index in range(1, 8)]
+READY = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]
+TOOL = 'panda_grasptarget'
+
+
+@contextlib.contextmanager
+def panda_node(urdf: str):
+    values = {'joints': PANDA, 'initial_positions': READY, 'max_velocity': [1.5],
+              'max_acceleration': [3.0], 'robot_description': urdf, 'blend_radius': 0.01}
+    with tempfile.TemporaryDirectory() as folder:
+        path = FilePath(folder) / 'panda.yaml'
+        path.write_text(json.dumps({'/**': {'ros__parameters': values}}))
+        with running_node('--params-file', str(path)):
+            probe = Probe()
+            try:
+                probe.wait_ready(30.0)
+                yield probe
+            finally:
+                probe.destroy_node()
+
+
+def tool_at_rest(probe: Probe, chain: NumpyChain, plans: int = 0) -> np.ndarray:
+    """Return the tool pose at rest after plan number ``plans`` (the probe spins only here)."""
+    probe.spin_until(lambda: len(probe.trajectories) >= plans, 20.0, f'plan {plans}')
+    return chain.pose(TOOL, dict(zip(PANDA, probe.wait_at_rest(20.0), strict=True)))
+
+
+def traj_gen(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, '-m', 'traj_gen_ros.cli.main', *args], cwd=REPO,
+                          env=node_env(), capture_output=True, text=True, timeout=TIMEOUT)
+
+
+def errors(first: np.ndarray, second: np.ndarray) -> tuple[float, float]:
+    angle = Rotation.from_matrix(first[:3, :3].T @ second[:3, :3]).magnitude()
+    return float(np.linalg.norm(first[:3, 3] - second[:3, 3])), float(angle)
+
+
+def test_line_and_arc_move_the_real_generator_onto_their_goals(request):
+    urdf = pybullet_urdfs(request.config)['panda'].read_text()
+    chain = NumpyChain(urdf)
+    with panda_node(urdf) as probe:
+        here = tool_at_rest(probe, chain)
+        # Two corners in the tool's frame at the start: 3 cm along its z, then 3 cm along x.
+        plans = len(probe.trajectories)
+        result = traj_gen('line', '0,0,0.03', '0.03,0,0.03', '--frame', TOOL, '--wait',
+                          '--timeout', '60')
+        assert result.returncode == 0, result.stderr
+        assert result.stdout.startswith('OK: accepted: profile=line, duration='), result.stdout
+        assert '(speed bounded by ' in result.stdout
+        jog = np.eye(4)
+        jog[:3, 3] = [0.03, 0.0, 0.03]
+        reached = tool_at_rest(probe, chain, plans + 1)
+        distance, angle = errors(reached, here @ jog)
+        assert distance < 1e-4 and angle < 1e-3, (distance, angle)
+
+        # An arc in the base frame: through 5 cm along +x and +y to 10 cm along +x, the
+        # tool turning 0.3 rad about the base z on the way.
+        start = reached[:3, 3]
+        turn = Rotation.from_euler('z', 0.3) * Rotation.from_matrix(reached[:3, :3])
+        interim = ','.join(f'{value:.9f}' for value in start + [0.05, 0.05, 0.0])
+        goal = ','.join(f'{value:.9f}' for value in [*(start + [0.1, 0.0, 0.0]),
+                                                     *turn.as_quat()])
+        plans = len(probe.trajectories)
+        result = traj_gen('arc', interim, goal, '--wait', '--json', '--timeout', '60')
+        assert result.returncode == 0, result.stderr
+        status = json.loads(result.stdout)
+        assert status['values']['request'] == 'circular_goal'
+        assert status['values']['profile'] == 'arc'
+        target = np.eye(4)
+        target[:3, :3], target[:3, 3] = turn.as_matrix(), start + [0.1, 0.0, 0.0]
+        distance, angle = errors(tool_at_rest(probe, chain, plans + 1), target)
+        assert distance < 1e-4 and angle < 1e-3, (distance, angle)
