@@ -118,7 +118,7 @@ def test_a_line_keeps_the_tool_on_it_within_a_tenth_of_a_millimetre(urdf):
         sent_ns = stamp_ns(probe.latest().header.stamp)
         status = probe.send([goal])
         assert status.level == DiagnosticStatus.OK, status.message
-        assert status.message.startswith('cartesian_path accepted: profile=line'), \
+        assert status.message.startswith('accepted: profile=line'), \
             status.message
         values = {kv.key: kv.value for kv in status.values}
         assert values['request'] == 'cartesian_path' and values['bounded_by']
@@ -176,14 +176,13 @@ def test_a_blended_corner_is_passed_without_stopping_and_an_unblended_one_stops(
             to_corner = np.linalg.norm(poses[:, :3, 3] - corner[:3, 3], axis=1)
             near = to_corner < 0.03
             speeds = np.linalg.norm(np.diff(poses[:, :3, 3], axis=0), axis=1)
-            moving = np.flatnonzero(speeds > 1e-7)
-            middle = speeds[moving[0]:moving[-1]]
+            middle = speeds[near[:-1] & near[1:]]  # per tick, about the corner
             if stops:
                 assert to_corner.min() < 1e-4  # it reaches the corner
-                assert middle.min() < 1e-6  # and rests there
+                assert middle.min() < 0.05 * speeds.max()  # and comes to rest there
             else:
                 assert to_corner.min() > 0.003  # it cuts the corner
-                assert middle.min() > 1e-5  # and never rests on the way
+                assert middle.min() > 0.3 * speeds.max()  # and never slows much
                 # Within the blend radius of the corner while it leaves the lines.
                 first, second = line_errors(poses, here, corner)[0], \
                     line_errors(poses, corner, goal)[0]
@@ -223,7 +222,8 @@ def test_paths_that_cannot_be_followed_are_refused_before_any_motion(urdf):
         status = probe.send([far])
         assert status.level == DiagnosticStatus.ERROR
         assert status.message.startswith('cartesian_path refused: '), status.message
-        assert '% of the path' in status.message, status.message
+        assert 'reach' in status.message and '% of the tool path' in status.message, \
+            status.message
         line = here.copy()
         line[:3, 3] += [0.05, 0.0, 0.0]
         status = probe.send([line, here, line], arc=True)

@@ -13,7 +13,7 @@ NO_TOOL = ToolLimits()
 
 
 def test_one_linear_joint_brakes_at_its_acceleration_limit():
-    """q = s: from ṡ = v the brake lasts v / a and covers v² / 2a (Craig's LSPB blend)."""
+    """Brake q = s: from ṡ = v the brake lasts v / a and covers v² / 2a (Craig's LSPB blend)."""
     path = line(1.0)
     joint_path = linear_joint().joint_path(path)
     plan, end = brake_along(path, joint_path, np.array([1.0]), np.array([2.0]), NO_TOOL,

@@ -101,8 +101,8 @@ def _grid(path: IdealPath, joint_path: JointPath, s: np.ndarray) -> PathGrid:
     """Sample both paths at ``s`` (its knots those of the path), no stop but the end."""
     knots = merge_values(float(path.length), path.knots, joint_path.knots)
     inside = knots[(knots > s[0]) & (knots < s[-1])]
-    return sample_grid(path, joint_path, s, nearest_points(s, inside) if inside.size else
-                    np.zeros(0, dtype=int), np.zeros(0, dtype=int))
+    at_knots = nearest_points(s, inside) if inside.size else np.zeros(0, dtype=int)
+    return sample_grid(path, joint_path, s, at_knots, np.zeros(0, dtype=int))
 
 
 def _stages(grid: PathGrid, velocity: np.ndarray, acceleration: np.ndarray,

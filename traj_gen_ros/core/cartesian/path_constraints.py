@@ -217,7 +217,7 @@ def _cut(path: IdealPath, joint_path: JointPath, knots: np.ndarray, tool_limited
 
 
 def sample_grid(path: IdealPath, joint_path: JointPath, s: np.ndarray, knots: np.ndarray,
-             stops: np.ndarray) -> PathGrid:
+                stops: np.ndarray) -> PathGrid:
     """Sample both paths at the grid ``s``; the left side differs only at the ``knots``."""
     q, dq_right, ddq_right = joint_states(joint_path.joints, s, 'right')
     _, dq_left, ddq_left = joint_states(joint_path.joints, s, 'left')

@@ -195,7 +195,7 @@ def grid_motion(grid: PathGrid, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def joint_trajectory(grid: PathGrid, x: np.ndarray, u: np.ndarray, times: np.ndarray
-                      ) -> Trajectory:
+                     ) -> Trajectory:
     """One quintic per interval from ``q``, ``q' ṡ`` and each side's ``q' s̈ + q'' ṡ²``."""
     rate = np.empty_like(grid.q)
     rate[0], rate[-1] = grid.dq[0, 0], grid.dq[1, -1]

@@ -95,14 +95,14 @@ def joint_path_request(config: Config, request: ToolPathRequest, state: State
         else:
             path = straight_path(start, targets, config.blend_radius)
     except ValueError as error:
-        raise RequestError(f'{request.kind}: {error}') from None
+        raise RequestError(str(error)) from None
     limits = config.limits
     lower = None if limits is None else limits.position.lower
     upper = None if limits is None else limits.position.upper
     try:
         joint_path = follow(chain, path, rest, lower=lower, upper=upper)
     except PathRefusal as refusal:
-        raise RequestError(f'{request.kind}: {refusal}') from None
+        raise RequestError(str(refusal)) from None
     positions = joint_path.joints.sample(joint_path.joints.breakpoints)[0]
     return JointPathRequest(np.arange(len(config.joints)), positions, brake, path, joint_path,
                             request.kind)
