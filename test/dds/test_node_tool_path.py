@@ -5,6 +5,8 @@ Every check is made on the streamed joint states, through an independent forward
 kinematics (``numpy_chain``) and an independent ideal path written here: a straight line
 with orientation by scipy's slerp, by the fraction of the line's length. At every published
 setpoint the tool is within 0.1 mm and 1 mrad of it; no joint exceeds its velocity limit;
+the duration is within 1 % of the time-optimal one, the reference an independent phase-plane
+timing on 10,000 points (test/support/topp_reference.py) of the same joint path;
 ``~/stop`` and the speed override mid-path keep the tool on the line.
 """
 
@@ -23,11 +25,18 @@ from pybullet_urdfs import pybullet_urdfs
 import pytest
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from scipy.spatial.transform import Rotation, Slerp
+from topp_reference import reference_duration
+from traj_gen_ros.core.cartesian.joint_path import follow
+from traj_gen_ros.core.cartesian.path_timing import ToolLimits
+from traj_gen_ros.core.cartesian.tool_path import straight_path
+from traj_gen_ros.core.kinematics import Chain
 
 JOINTS = [f'panda_joint{index}' for index in range(1, 8)]
 READY = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]
 TOOL = 'panda_grasptarget'
-MAX_VELOCITY = 1.5
+MAX_VELOCITY, MAX_ACCELERATION = 1.5, 3.0
+#: The node's defaults of the tool's limits (docs/node.md).
+TOOL_LIMITS = ToolLimits(0.25, 1.2, np.pi / 2)
 
 
 @pytest.fixture(scope='module')
@@ -71,7 +80,7 @@ class PathProbe(Probe):
 def session(urdf_text, **extra):
     """Run a generator for the Panda's joints with its URDF."""
     values = {'joints': JOINTS, 'initial_positions': READY, 'max_velocity': [MAX_VELOCITY],
-              'max_acceleration': [3.0], 'robot_description': urdf_text} | extra
+              'max_acceleration': [MAX_ACCELERATION], 'robot_description': urdf_text} | extra
     with tempfile.TemporaryDirectory() as folder:
         path = FilePath(folder) / 'panda.yaml'
         path.write_text(json.dumps({'/**': {'ros__parameters': values}}))
@@ -130,6 +139,13 @@ def test_a_line_keeps_the_tool_on_it_within_a_tenth_of_a_millimetre(urdf):
         assert end_distance < 1e-4
         velocities = np.array([s.velocity for s in states])
         assert np.abs(velocities).max() <= MAX_VELOCITY * (1 + 1e-9)
+        # Time-optimal: within 1 % of the reference timing of the same joint path.
+        core = Chain.from_urdf(urdf, JOINTS, tool_frame=TOOL)
+        path = straight_path(core.forward(position), [goal])
+        reference = reference_duration(path, follow(core, path, position).joints.sample,
+                                       MAX_VELOCITY, MAX_ACCELERATION, TOOL_LIMITS)
+        duration = float(values['duration'])
+        assert reference * (1 - 1e-3) <= duration <= reference * 1.01, (duration, reference)
         probe.spin_until(lambda: probe.tool_paths, 10.0, '~/tool_path')
         shown = probe.tool_paths[-1]
         assert shown.header.frame_id == 'panda_link0' and len(shown.poses) >= 2
