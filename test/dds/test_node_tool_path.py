@@ -13,18 +13,21 @@ timing on 10,000 points (test/support/topp_reference.py) of the same joint path;
 import contextlib
 import json
 from pathlib import Path as FilePath
+import subprocess
+import sys
 import tempfile
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path
-from node_harness import Probe, running_node, stamp_ns
+from node_harness import end_process, node_env, Probe, running_node, stamp_ns
 import numpy as np
 from numpy_chain import NumpyChain
 from pybullet_urdfs import pybullet_urdfs
 import pytest
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from scipy.spatial.transform import Rotation, Slerp
+from std_msgs.msg import Float64MultiArray
 from topp_reference import reference_duration
 from traj_gen_ros.core.cartesian.joint_path import follow
 from traj_gen_ros.core.cartesian.path_timing import ToolLimits
@@ -155,14 +158,15 @@ def test_a_line_keeps_the_tool_on_it_within_a_tenth_of_a_millimetre(urdf):
 
 def test_stop_and_the_speed_override_mid_line_keep_the_tool_on_it(urdf):
     chain = NumpyChain(urdf)
-    with session(urdf, max_linear_velocity=0.1) as (_, probe):
+    # Gentle joint accelerations: a brake of each joint on its own would leave the line.
+    with session(urdf, max_acceleration=[0.5]) as (_, probe):
         position = probe.wait_at_rest(20.0)
         here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
         goal = here.copy()
         goal[:3, 3] += [0.0, 0.25, 0.0]
         sent_ns = stamp_ns(probe.latest().header.stamp)
         assert probe.send([goal]).level == DiagnosticStatus.OK
-        probe.spin_until(lambda: np.linalg.norm(probe.latest().velocity) > 0.05, 10.0,
+        probe.spin_until(lambda: np.linalg.norm(probe.latest().velocity) > 0.2, 10.0,
                          'the motion')
         probe.set_parameters(speed_scaling=0.4)
         count = len(probe.states)
@@ -250,3 +254,40 @@ def test_paths_that_cannot_be_followed_are_refused_before_any_motion(urdf):
         status = probe.send([line], frame='no_such_link')
         assert status.level == DiagnosticStatus.ERROR and 'no_such_link' in status.message
         assert np.array_equal(probe.wait_at_rest(), position)
+
+
+ROBOT = FilePath(__file__).resolve().parents[1] / 'support' / 'standin_robot.py'
+
+
+def test_a_lost_measured_state_brakes_along_the_line(urdf):
+    """The arm's state stops mid-line (its driver stalls): the brake keeps the tool on it."""
+    robot = subprocess.Popen(
+        [sys.executable, str(ROBOT), '--joints', ','.join(JOINTS),
+         '--start', ','.join(map(str, READY))], env=node_env(),
+        stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
+    chain = NumpyChain(urdf)
+    try:
+        with session(urdf, joint_topic='/robot/joint_states',
+                     command_out_topic='/robot/commands', joint_topic_timeout=0.3,
+                     max_acceleration=[0.5]) as (node, probe):
+            pause = probe.create_publisher(Float64MultiArray, '/robot/pause', 10)
+            position = probe.wait_at_rest(20.0)
+            here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+            goal = here.copy()
+            goal[:3, 3] += [0.0, -0.2, 0.0]
+            sent_ns = stamp_ns(probe.latest().header.stamp)
+            assert probe.send([goal]).level == DiagnosticStatus.OK
+            probe.spin_until(lambda: np.linalg.norm(probe.latest().velocity) > 0.2, 10.0,
+                             'the motion')
+            probe.spin_until(lambda: pause.get_subscription_count() > 0, 10.0, 'the robot')
+            pause.publish(Float64MultiArray(data=[2.0]))
+            probe.spin_until(lambda: 'no measured state on /robot/joint_states' in
+                             node.output(), 10.0, 'the lost state')
+            states = moved(probe, sent_ns)
+            poses = tool_poses(chain, states)
+            distance, angle = line_errors(poses, here, goal)
+            assert distance.max() < 1e-4 and angle.max() < 1e-3, (distance.max(), angle.max())
+            travelled = np.linalg.norm(poses[-1, :3, 3] - here[:3, 3])
+            assert 0.001 < travelled < 0.19  # braked on the way, on the line
+    finally:
+        end_process(robot)
