@@ -67,6 +67,7 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from traj_gen_ros.node.action.server import create_server
 from traj_gen_ros.node.action.tolerance_parameters import ToleranceParameters
+from traj_gen_ros.node.description.held_joints import HeldJoints
 from traj_gen_ros.node.description.robot_description import NodeLimits
 from traj_gen_ros.node.diagnostics.publisher import CountingAnswers, NodeDiagnostics
 from traj_gen_ros.node.diagnostics.status import RateMeter
@@ -112,7 +113,9 @@ class TrajectoryGenerator(Node):
         """Declare parameters, check them, and create the interface; ValueError if invalid."""
         super().__init__(NODE_NAME, **kwargs)
         self._declare_parameters()
-        self._limits = NodeLimits(self)
+        # The URDF's joints outside `joints`: measured (joint_topic) in, the chains hold them.
+        self._held = HeldJoints()
+        self._limits = NodeLimits(self, self._held)
         self._config = self._read_config()
         initial = initial_state(self._config.joints,
                                 self.get_parameter('initial_positions').value)
@@ -209,7 +212,7 @@ class TrajectoryGenerator(Node):
                              'joint_state_broadcaster publishes it')
         return MeasuredState(self._config.joints, resolved,
                              self.get_parameter('state_tolerance').value,
-                             self.get_parameter('joint_topic_timeout').value)
+                             self.get_parameter('joint_topic_timeout').value, self._held)
 
     def _status_with_speed(self, measured: MeasuredState | None
                            ) -> Callable[[], tuple[int, str, list[tuple[str, str]]]]:

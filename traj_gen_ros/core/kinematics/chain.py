@@ -1,10 +1,11 @@
 """
 The kinematic chain from ``base_frame`` to ``tool_frame`` of a URDF, for a set of joints.
 
-:meth:`Chain.from_urdf` chooses and checks the chain (:mod:`.urdf_tree`, lxml), then has
-Pinocchio build the model (:mod:`.pinocchio_model`); the chain then gives forward
-kinematics (:meth:`Chain.forward`, :meth:`Chain.frame_pose`), the Jacobian
-(:meth:`Chain.jacobian`) and inverse kinematics (:meth:`Chain.inverse`, :mod:`.inverse`).
+:meth:`Chain.from_urdf` chooses and checks the chain (:mod:`.chain_choice` on the tree
+of :mod:`.urdf_tree`, lxml), then has Pinocchio build the model (:mod:`.pinocchio_model`);
+the chain then gives forward kinematics (:meth:`Chain.forward`, :meth:`Chain.frame_pose`),
+the Jacobian and its rate (:meth:`Chain.jacobian`, :meth:`Chain.jacobian_rate`:
+:mod:`.tool_jacobian`) and inverse kinematics (:meth:`Chain.inverse`, :mod:`.inverse`).
 
 Units: rad (m for prismatic joints) per joint, in the order of ``joints``; poses are
 ``(4, 4)`` homogeneous transforms in ``base_frame``, metres. Defaults: ``base_frame`` the
@@ -19,58 +20,38 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+from traj_gen_ros.core.kinematics.chain_choice import ChainChoice, choose_chain, describe_chain
 from traj_gen_ros.core.kinematics.configuration import Configuration
 from traj_gen_ros.core.kinematics.inverse import IkSolution, solve
 from traj_gen_ros.core.kinematics.pinocchio_model import build_model
-from traj_gen_ros.core.kinematics.urdf_tree import listing, SCALAR_TYPES, UrdfTree
+from traj_gen_ros.core.kinematics.tool_jacobian import ToolJacobian
+from traj_gen_ros.core.kinematics.urdf_tree import UrdfTree
 
 
-def _check_joints(tree: UrdfTree, joints: Sequence[str]) -> tuple[str, ...]:
-    if not isinstance(joints, str):
-        joints = tuple(joints)
-    if isinstance(joints, str) or not all(isinstance(name, str) for name in joints):
-        raise ValueError(f'joints must be a sequence of joint names, not {joints!r}')
-    movable = [joint.name for joint in tree.joints.values()
-               if joint.type in SCALAR_TYPES and joint.mimic is None]
-    if not joints:
-        raise ValueError(f"joints is empty; the URDF's movable joints are {listing(movable)}")
-    twice = sorted({name for name in joints if joints.count(name) > 1})
-    if twice:
-        raise ValueError(f'joints names {listing(twice)} more than once')
-    for name in joints:
-        joint = tree.joints.get(name)
-        if joint is None:
-            raise ValueError(f'unknown joint {name!r}: the URDF has no such joint; its '
-                             f'movable joints are {listing(movable)}')
-        if joint.type not in SCALAR_TYPES:
-            raise ValueError(f'joint {name!r} is a {joint.type} joint: a chain moves only '
-                             f'revolute, continuous and prismatic joints')
-        if joint.mimic is not None:
-            raise ValueError(f'joint {name!r} mimics {joint.mimic.leader!r}: it follows its '
-                             'leader and cannot be one of the joints')
-    return joints
-
-
-def _relative_rate(tool_rate: np.ndarray, tool: np.ndarray, base_rate: np.ndarray,
-                   base: np.ndarray, lever: np.ndarray, rate: np.ndarray) -> np.ndarray:
+def joint_values(q: Sequence[float] | np.ndarray, joints: tuple[str, ...], what: str = 'q',
+                 taker: str = '') -> np.ndarray:
     """
-    Return ``Ṁ − [ω_b]× M`` (world axes) of the tool's Jacobian relative to a moving base.
+    Return joint positions ``q`` as floats, checked: a value per joint, each finite.
 
-    ``M = (J_t − J_b + [r]× J_b^ω, J_t^ω − J_b^ω)`` from the tool's and the base's world
-    Jacobians ``tool``, ``base`` and their time derivatives ``tool_rate``, ``base_rate`` at
-    joint velocity ``rate``; ``r`` the lever from the base's origin to the tool's, ``ṙ =
-    v_t − v_b``, ``ω_b = J_b^ω rate``.
+    ``(joints,)`` or ``(samples, joints)``; only ``(joints,)`` where ``taker`` (the method
+    that takes it) is given. Else a ``ValueError`` naming ``what`` and the joint.
     """
-    spin = base[3:] @ rate
-    moved = tool - base
-    moved[:3] += np.cross(lever, base[3:], axisb=0, axisc=0)
-    result = tool_rate - base_rate
-    result[:3] += (np.cross(moved[:3] @ rate - np.cross(lever, spin), base[3:], axisb=0,
-                            axisc=0)
-                   + np.cross(lever, base_rate[3:], axisb=0, axisc=0))
-    result[:3] -= np.cross(spin, moved[:3], axisb=0, axisc=0)
-    result[3:] -= np.cross(spin, moved[3:], axisb=0, axisc=0)
-    return result
+    try:
+        array = np.asarray(q, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f'{what} must be numbers, one per joint') from None
+    if array.ndim not in (1, 2) or array.shape[-1] != len(joints):
+        raise ValueError(f'{what} has shape {array.shape}: expected ({len(joints)},) '
+                         f'or (samples, {len(joints)}), one value per joint of '
+                         f'{", ".join(joints)}')
+    bad = ~np.isfinite(array)
+    if bad.any():
+        index = np.argwhere(bad)[0]
+        raise ValueError(f'{what} of joint {joints[index[-1]]!r} is '
+                         f'{array[tuple(index)]}: every position must be finite')
+    if taker and array.ndim != 1:
+        raise ValueError(f'{what} has shape {array.shape}: {taker} takes ({len(joints)},)')
+    return array
 
 
 def _frozen(values: Any) -> np.ndarray:
@@ -95,14 +76,13 @@ class Chain:
         (revolute and continuous joints that no other joint mimics).
     """
 
-    def __init__(self, pin: Any, model: Any, tree: UrdfTree, joints: tuple[str, ...],
-                 base_frame: str, tool_frame: str, on_path: tuple[str, ...]) -> None:
+    def __init__(self, pin: Any, model: Any, tree: UrdfTree, choice: ChainChoice) -> None:
         """Wrap a built model; use :meth:`from_urdf`."""
-        self._pin, self._model, self._tree = pin, model, tree
+        self._pin, self._model, self._tree, self._choice = pin, model, tree, choice
         self._data = model.createData()
+        joints, base_frame, tool_frame = choice.joints, choice.base_frame, choice.tool_frame
         self.joints, self.base_frame, self.tool_frame = joints, base_frame, tool_frame
         self.links = tree.links
-        self._on_path = on_path
         self._configuration = Configuration(pin, model, tree, joints)
         self.lower, self.upper, self.angular, self.periodic = (_frozen(array) for array in (
             [tree.joints[name].lower for name in joints],
@@ -112,10 +92,9 @@ class Chain:
         self._frames = {link: model.getFrameId(link, pin.FrameType.BODY) for link in tree.links}
         self._tool, self._base = self._frames[tool_frame], self._frames[base_frame]
         self._base_is_world = base_frame == tree.root
-        up, _ = tree.path(base_frame, tool_frame)
-        moving = set(joints).union(*(tree.followers(name) for name in joints))
-        self._base_moves = any(joint.name in moving for joint in up)
-        self._world_aligned = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        self._jacobian = ToolJacobian(pin, model, self._data, self._configuration,
+                                      self._tool, self._base, self._base_is_world,
+                                      choice.base_moves)
 
     @classmethod
     def from_urdf(cls, urdf_text: str | bytes, joints: Sequence[str],
@@ -143,32 +122,16 @@ class Chain:
         if isinstance(urdf_text, bytes):
             urdf_text = urdf_text.decode('utf-8', errors='replace')
         tree = UrdfTree.parse(urdf_text)
-        joints = _check_joints(tree, joints)
-        base = tree.root if not base_frame else tree.check_link(base_frame, 'base_frame')
-        if not tool_frame:
-            tool = tree.fixed_end(tree.joints[joints[-1]].child)
-        else:
-            tool = tree.check_link(tool_frame, 'tool_frame')
-        up, down = tree.path(base, tool)
-        on_path = tuple(joint.name for joint in (*up, *down))
-        missing = [name for name in joints if name not in on_path
-                   and not set(tree.followers(name)) & set(on_path)]
-        if missing:
-            moving = [name for name in on_path if tree.joints[name].type != 'fixed']
-            has = f'its joints are {listing(moving)}' if moving else 'it has no moving joint'
-            raise ValueError(f'the chain from {base!r} to {tool!r} does not contain joint(s) '
-                             f'{listing(missing)} of joints ({has}): choose a base_frame '
-                             'above and a tool_frame below every joint')
+        choice = choose_chain(tree, joints, base_frame, tool_frame)
         pin, model = build_model(urdf_text)
-        chain = cls(pin, model, tree, joints, base, tool, on_path)
+        chain = cls(pin, model, tree, choice)
         if held:
             chain.hold(held)
         return chain
 
     def copy(self) -> Chain:
         """Return the same chain with its own Pinocchio ``Data`` (for another thread)."""
-        twin = Chain(self._pin, self._model, self._tree, self.joints, self.base_frame,
-                     self.tool_frame, self._on_path)
+        twin = Chain(self._pin, self._model, self._tree, self._choice)
         twin.hold(self.held)
         return twin
 
@@ -191,38 +154,7 @@ class Chain:
 
     def describe(self) -> str:
         """Return one line naming the chain: base → tool, the joints, the others on the way."""
-        text = (f'kinematic chain {self.base_frame} -> {self.tool_frame}: '
-                f'{len(self.joints)} joints {", ".join(self.joints)}')
-        moving = [name for name in self._on_path if name not in self.joints
-                  and self._tree.joints[name].type != 'fixed']
-        leaders = {name: self._tree.mimic_root(name)[0] for name in moving
-                   if self._tree.joints[name].mimic is not None}
-        following = [f'{name} mimics {leader}' for name, leader in leaders.items()
-                     if leader in self.joints]
-        values = self.held
-        held = [f'{name}={values[name]:g}' if name in values else f'{name} (neutral)'
-                for name in moving if leaders.get(name) not in self.joints]
-        if following:
-            text += '; ' + ', '.join(following)
-        if held:
-            text += '; held on the way: ' + ', '.join(held)
-        return text
-
-    def _values(self, q: Sequence[float] | np.ndarray, what: str = 'q') -> np.ndarray:
-        try:
-            array = np.asarray(q, dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError(f'{what} must be numbers, one per joint') from None
-        if array.ndim not in (1, 2) or array.shape[-1] != len(self.joints):
-            raise ValueError(f'{what} has shape {array.shape}: expected ({len(self.joints)},) '
-                             f'or (samples, {len(self.joints)}), one value per joint of '
-                             f'{", ".join(self.joints)}')
-        bad = ~np.isfinite(array)
-        if bad.any():
-            index = np.argwhere(bad)[0]
-            raise ValueError(f'{what} of joint {self.joints[index[-1]]!r} is '
-                             f'{array[tuple(index)]}: every position must be finite')
-        return array
+        return describe_chain(self._tree, self._choice, self.held)
 
     def _placement(self, config: np.ndarray, frame: int) -> Any:
         """Return Pinocchio's SE3 of ``frame`` in ``base_frame`` at one configuration."""
@@ -245,42 +177,18 @@ class Chain:
         :param q: ``(joints,)`` or ``(samples, joints)``, rad or m.
         :return: ``(4, 4)`` (or ``(samples, 4, 4)``) homogeneous transform(s), metres.
         """
-        return self._poses(self._configuration.config(self._values(q)), self._tool)
+        return self._poses(self._configuration.config(joint_values(q, self.joints)), self._tool)
 
     def frame_pose(self, link: str, q: Sequence[float] | np.ndarray) -> np.ndarray:
         """Return the pose of any ``link`` in ``base_frame`` at ``q``, as :meth:`forward`."""
         frame = self._frames.get(link)
         if frame is None:
             self._tree.check_link(link, 'link')
-        return self._poses(self._configuration.config(self._values(q)), frame)
+        return self._poses(self._configuration.config(joint_values(q, self.joints)), frame)
 
     def _pose_and_jacobian(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return ``(R, p, J)`` of the tool in ``base_frame`` at ``(joints,)`` positions."""
-        pin, model, data = self._pin, self._model, self._data
-        config = self._configuration.config(q)
-        pin.computeJointJacobians(model, data, config)
-        tool = pin.updateFramePlacement(model, data, self._tool)
-        jacobian = pin.getFrameJacobian(model, data, self._tool, self._world_aligned)
-        jacobian = jacobian @ self._configuration.selection
-        if self._base_is_world:
-            return tool.rotation, tool.translation, jacobian
-        base = pin.updateFramePlacement(model, data, self._base)
-        rotation_t = base.rotation.T
-        if self._base_moves:
-            of_base = pin.getFrameJacobian(model, data, self._base, self._world_aligned)
-            of_base = of_base @ self._configuration.selection
-            lever = tool.translation - base.translation
-            jacobian = jacobian - of_base
-            jacobian[:3] += np.cross(lever, of_base[3:], axisb=0, axisc=0)
-        relative = base.actInv(tool)
-        return (relative.rotation, relative.translation,
-                np.vstack((rotation_t @ jacobian[:3], rotation_t @ jacobian[3:])))
-
-    def _one(self, q: Sequence[float] | np.ndarray, taker: str, what: str = 'q') -> np.ndarray:
-        q = self._values(q, what)
-        if q.ndim != 1:
-            raise ValueError(f'{what} has shape {q.shape}: {taker} takes ({len(self.joints)},)')
-        return q
+        return self._jacobian.pose_and_jacobian(q)
 
     def jacobian(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
         """
@@ -289,7 +197,7 @@ class Chain:
         Rows: the velocity of the ``tool_frame`` origin (m/s), then its angular velocity
         (rad/s), both relative to ``base_frame`` and in its axes, per unit joint velocity.
         """
-        return self._pose_and_jacobian(self._one(q, 'the Jacobian'))[2]
+        return self._pose_and_jacobian(joint_values(q, self.joints, taker='the Jacobian'))[2]
 
     def pose_and_jacobian(self, q: Sequence[float] | np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray]:
@@ -300,7 +208,7 @@ class Chain:
         step (the joint path of a tool path, :mod:`traj_gen_ros.core.cartesian`).
         """
         rotation, translation, jacobian = self._pose_and_jacobian(
-            self._one(q, 'pose_and_jacobian'))
+            joint_values(q, self.joints, taker='pose_and_jacobian'))
         pose = np.eye(4)
         pose[:3, :3], pose[:3, 3] = rotation, translation
         return pose, jacobian
@@ -312,30 +220,12 @@ class Chain:
 
         ``(6, joints)``, along ``q + t·rate``: the tool's acceleration is ``J q̈ + J̇ q̇``
         (``J̇ q̇`` the drift), and a minimum-norm joint path's curvature needs ``J̇ᵀ`` too.
-        Pinocchio's ``getFrameJacobianTimeVariation`` (``LOCAL_WORLD_ALIGNED``). For a
-        ``base_frame`` that the joints move, the chain's ``J = R_bᵀ M`` with ``M = (J_t − J_b
-        + [r]× J_b^ω, J_t^ω − J_b^ω)`` (``r`` from the base's origin to the tool's)
-        differentiates to ``R_bᵀ (Ṁ − [ω_b]× M)``, ``ṙ = v_t − v_b``.
+        Pinocchio's ``getFrameJacobianTimeVariation`` (``LOCAL_WORLD_ALIGNED``); for a
+        ``base_frame`` that the joints move, see :mod:`.tool_jacobian`.
         """
-        q, rate = self._one(q, 'jacobian_rate'), self._one(rate, 'jacobian_rate', 'rate')
-        pin, model, data, frame = self._pin, self._model, self._data, self._world_aligned
-        selection = self._configuration.selection
-        pin.computeJointJacobiansTimeVariation(model, data, self._configuration.config(q),
-                                               selection @ rate)
-        tool = pin.getFrameJacobianTimeVariation(model, data, self._tool, frame) @ selection
-        if self._base_is_world:
-            return tool
-        base = pin.updateFramePlacement(model, data, self._base)
-        if self._base_moves:
-            tool_origin = pin.updateFramePlacement(model, data, self._tool).translation
-            lever = tool_origin - base.translation
-            of_tool = pin.getFrameJacobian(model, data, self._tool, frame) @ selection
-            of_base = pin.getFrameJacobian(model, data, self._base, frame) @ selection
-            turning = pin.getFrameJacobianTimeVariation(model, data, self._base,
-                                                        frame) @ selection
-            tool = _relative_rate(tool, of_tool, turning, of_base, lever, rate)
-        rotation_t = base.rotation.T
-        return np.vstack((rotation_t @ tool[:3], rotation_t @ tool[3:]))
+        q = joint_values(q, self.joints, taker='jacobian_rate')
+        rate = joint_values(rate, self.joints, 'rate', 'jacobian_rate')
+        return self._jacobian.rate(q, rate)
 
     def _tool_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         placement = self._placement(self._configuration.config(q), self._tool)
@@ -360,7 +250,7 @@ class Chain:
             saying how close it came and which joint limits stopped it).
         :raises ValueError: an invalid target, seed or limits.
         """
-        return solve(self, target, self._values(seed, 'seed'),
+        return solve(self, target, joint_values(seed, self.joints, 'seed'),
                      self.lower if lower is None else lower,
                      self.upper if upper is None else upper,
                      position_tolerance, orientation_tolerance)

@@ -32,6 +32,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
+from traj_gen_ros.node.description.held_joints import HeldJoints
 from traj_gen_ros.node.description.joint_limits import (
     ABSENT,
     describe_sources,
@@ -51,13 +52,17 @@ LIMIT_PARAMETERS = ('min_position', 'max_position', 'max_velocity', 'robot_descr
 class NodeLimits:
     """The URDF in force, where it came from, and the limits it gives with the parameters."""
 
-    def __init__(self, node: Node) -> None:
+    def __init__(self, node: Node, held: HeldJoints | None = None) -> None:
         """
         Read the ``robot_description`` parameter and subscribe to the topic.
+
+        ``held``: the measured positions of the joints outside ``joints``, at which every
+        chain built here holds them (None: at 0).
 
         :raises ValueError: the ``robot_description`` parameter is not a usable URDF.
         """
         self._node = node
+        self._held = HeldJoints() if held is None else held
         self._listeners: list[Callable[[], None]] = []
         self._joints = tuple(node.get_parameter('joints').value)
         self._urdf = UrdfLimits.unlimited(self._joints)
@@ -100,7 +105,7 @@ class NodeLimits:
 
     def _take_kinematics(self, text: str) -> None:
         """Build the chain of the URDF now in force; log it (INFO) or why none (WARN)."""
-        self.kinematics = build_kinematics(text, self._joints, *self._frames)
+        self.kinematics = build_kinematics(text, self._joints, *self._frames, self._held)
         if self.source == 'none':
             return
         logger = self._node.get_logger()

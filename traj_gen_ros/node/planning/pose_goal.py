@@ -9,7 +9,9 @@ from the start state (:meth:`Chain.inverse`: the seed first, then fixed restarts
 answer nearest the start, inside every joint's position limits in force) and the joint goal
 goes through the pipeline as a ``~/goal`` with those joint angles
 (:data:`~traj_gen_ros.node.planning.pipeline.GOAL`: the profile in force, min-time timing,
-continuous joints the short way). No ROS here.
+continuous joints the short way). The URDF's joints outside ``joints`` stand where they were
+last measured: the request thread's chain is held there once per plan
+(:meth:`RobotKinematics.for_requests`, :func:`request_chain`). No ROS here.
 
 Units: m, rad.
 """
@@ -17,6 +19,7 @@ Units: m, rad.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from traj_gen_ros.core.kinematics import UnreachablePoseError
@@ -43,16 +46,28 @@ class PoseRequest:
     answer: dict[str, str] = field(default_factory=dict)
 
 
-def target_in_base(config: Config, request: PoseRequest, position: np.ndarray) -> np.ndarray:
+def request_chain(config: Config) -> Any:
+    """
+    Return the request thread's chain, held at the latest measured positions of the others.
+
+    Once per plan, on the request thread: the plan then sees one set of held values.
+
+    :raises RequestError: no kinematics in force (saying why).
+    """
+    chain = config.kinematics.for_requests()
+    if chain is None:
+        raise RequestError(config.kinematics.problem)
+    return chain
+
+
+def target_in_base(chain: Any, request: PoseRequest, position: np.ndarray) -> np.ndarray:
     """
     Return the requested tool pose in ``base_frame`` (``(4, 4)``), from joint ``position``.
 
-    :raises RequestError: no kinematics in force (saying why), or an unknown frame (naming
-        it and the valid ones).
+    ``chain``: :func:`request_chain`'s.
+
+    :raises RequestError: an unknown frame (naming it and the valid ones).
     """
-    chain = config.kinematics.chain
-    if chain is None:
-        raise RequestError(config.kinematics.problem)
     frame = request.frame_id
     if frame in ('', chain.base_frame):
         return request.pose
@@ -76,8 +91,8 @@ def joint_goal(config: Config, request: PoseRequest, state: State) -> GoalReques
     :raises RequestError: the pose cannot be reached within the limits (how close it came,
         which joint limit stopped it), or no kinematics, or an unknown frame.
     """
-    chain = config.kinematics.chain
-    target = target_in_base(config, request, state.position)
+    chain = request_chain(config)
+    target = target_in_base(chain, request, state.position)
     limits = config.limits
     lower = None if limits is None else limits.position.lower
     upper = None if limits is None else limits.position.upper

@@ -2,7 +2,8 @@
 Lines and arcs of the tool (LIN, CIRC): ``~/cartesian_path`` and ``~/circular_goal``.
 
 A request's poses are resolved in their frame (as a pose goal's:
-:func:`~traj_gen_ros.node.planning.pose_goal.target_in_base`, at the start state), the arm
+:func:`~traj_gen_ros.node.planning.pose_goal.target_in_base`, at the start state, with the
+chain of :func:`~traj_gen_ros.node.planning.pose_goal.request_chain`), the arm
 brakes to rest if it moves (:func:`~traj_gen_ros.node.planning.pipeline.plan_stop`), and
 from that rest the core plans the tool's path (:mod:`traj_gen_ros.core.cartesian`): the
 ideal path (straight lines with ``blend_radius`` blends, or the circle through the
@@ -30,7 +31,7 @@ from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.messages.parsing import RequestError
 from traj_gen_ros.node.planning.motion import PlannedMotion, State
 from traj_gen_ros.node.planning.pipeline import plan_request, plan_stop, Steps
-from traj_gen_ros.node.planning.pose_goal import PoseRequest, target_in_base
+from traj_gen_ros.node.planning.pose_goal import PoseRequest, request_chain, target_in_base
 from traj_gen_ros.node.settings.config import Config
 
 #: The request kinds, as they appear on ``~/status``.
@@ -83,8 +84,8 @@ def joint_path_request(config: Config, request: ToolPathRequest, state: State
         raise RequestError(f'{request.kind} under profile scurve is not supported yet (the '
                            'jerk bound along a tool path is not implemented): set profile '
                            'to lspb, cubic or quintic')
-    chain = config.kinematics.chain
-    targets = [target_in_base(config, PoseRequest(request.frame_id, pose), state.position)
+    chain = request_chain(config)
+    targets = [target_in_base(chain, PoseRequest(request.frame_id, pose), state.position)
                for pose in request.poses]
     brake = plan_stop(config, state).plan
     rest = brake.sample(brake.duration)[0][0]

@@ -12,7 +12,11 @@ With ``joint_topic`` set, the arm is the reference (docs/node-design.md, "Measur
   brakes and refuses requests until one arrives.
 
 * :meth:`MeasuredState.fresh_position`: the positions while at most :data:`FRESH_AGE` s
-  old and not lost, for the velocity command's position correction.
+  old and not lost, for the velocity command's position correction;
+* the other joints a valid message names (not in ``joints``) go to the kinematic chains
+  (:class:`~traj_gen_ros.node.description.held_joints.HeldJoints`): the URDF's joints
+  that the node does not command stand where they are measured (a non-finite one keeps
+  its last value); only when one changed.
 
 A message lacking a joint or carrying a non-finite position is ignored (counted). Times
 are ``time.monotonic()`` seconds (the timeout is wall time even under ``use_sim_time``).
@@ -27,6 +31,7 @@ import math
 
 import numpy as np
 from traj_gen_ros.core.validation import per_joint
+from traj_gen_ros.node.description.held_joints import HeldJoints
 from traj_gen_ros.node.diagnostics.status import ERROR, OK, WARN
 
 #: A measured state older than this (s) corrects no velocity command (issue 28).
@@ -46,13 +51,14 @@ class MeasuredState:
     """The latest valid measured positions in ``joints`` order, and what they tell."""
 
     def __init__(self, joints: Sequence[str], topic: str, tolerance: object,
-                 timeout: float) -> None:
+                 timeout: float, held: HeldJoints | None = None) -> None:
         """
         Read ``joints`` off messages of ``topic``; raise ``ValueError`` on a bad parameter.
 
         :param tolerance: ``state_tolerance``, rad: one value or one per joint, >= 0
             (0: a deviation is never re-seeded).
         :param timeout: ``joint_topic_timeout``, s (0: never).
+        :param held: where the other joints' positions go (None: nowhere).
         """
         self.joints = tuple(joints)
         self.topic = topic
@@ -71,6 +77,10 @@ class MeasuredState:
         self.lost = False  # the timeout has passed since the latest valid message
         self._names: tuple[str, ...] = ()
         self._columns = np.zeros(0, dtype=int)
+        self._held = held
+        self._other_names: tuple[str, ...] = ()  # the names not in joints, and their columns
+        self._other_columns = np.zeros(0, dtype=int)
+        self._other_values: list[float] | None = None  # as last given to held
 
     def read(self, names: Sequence[str], positions: np.ndarray, now: float,
              velocities: Sequence[float] = ()) -> np.ndarray | None:
@@ -90,15 +100,23 @@ class MeasuredState:
                 return None
             self._names = names
             self._columns = np.array([found[name] for name in self.joints], dtype=int)
+            ours = set(self.joints)
+            others = [(column, name) for name, column in found.items() if name not in ours]
+            self._other_names = tuple(name for _, name in others)
+            self._other_columns = np.array([column for column, _ in others], dtype=int)
+            self._other_values = None
         if len(positions) != len(names):
             self.incomplete += 1
             return None
-        position = np.asarray(positions, dtype=float)[self._columns]
+        every = np.asarray(positions, dtype=float)
+        position = every[self._columns]
         if not np.isfinite(position).all():
             self.non_finite += 1
             return None
         self.valid += 1
         self.position = position
+        if self._held is not None and self._other_names:
+            self._hold_others(every[self._other_columns].tolist())
         velocity = None
         if len(velocities) == len(names):
             velocity = np.asarray(velocities, dtype=float)[self._columns]
@@ -107,6 +125,15 @@ class MeasuredState:
         self.received_at = now
         self.lost = False
         return position
+
+    def _hold_others(self, values: list[float]) -> None:
+        """Give the other joints' positions (rad or m) to ``held`` if any changed."""
+        if values == self._other_values:  # the usual case at rest (a NaN never equals)
+            return
+        self._other_values = values
+        self._held.update({name: value for name, value
+                           in zip(self._other_names, values, strict=True)
+                           if math.isfinite(value)})
 
     def timed_out(self, now: float) -> bool:
         """Tell whether no valid message arrived for ``timeout`` s (after the first one)."""

@@ -4,8 +4,9 @@
 Published (``geometry_msgs/PoseStamped``, reliable, depth 10, as ``joint_states``) right
 after each setpoint while a kinematic chain is in force and ``publish_tool_pose`` is true,
 so ``ros2 topic echo`` shows where the tool is. Forward kinematics on the stream thread's
-own chain (:attr:`RobotKinematics.stream_chain`), written straight to CDR; stamped with
-the node clock when published.
+own chain (:meth:`RobotKinematics.for_stream`: held at the latest measured positions of
+the joints outside ``joints``, once per tick), written straight to CDR; stamped with the
+node clock when published.
 
 Units: m.
 """
@@ -35,7 +36,7 @@ class ToolPoseOutput:
     def __call__(self, position: np.ndarray, velocity: np.ndarray) -> None:
         """Publish the tool pose of setpoint ``position`` (rad or m), if a chain is in force."""
         del velocity
-        chain = self._kinematics().stream_chain
+        chain = self._kinematics().for_stream()
         if chain is None:
             return
         point, quaternion = pose_quaternion(chain.forward(position))
