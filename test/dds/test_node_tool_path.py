@@ -66,17 +66,23 @@ class PathProbe(Probe):
 
     def send(self, poses, frame='', arc=False):
         """Send ``poses`` (each ``(4, 4)``) as one Path; return the answer on ~/status."""
-        message = Path()
-        message.header.frame_id = frame
-        for pose in poses:
-            stamped = PoseStamped()
-            point, orientation = stamped.pose.position, stamped.pose.orientation
-            point.x, point.y, point.z = (float(v) for v in pose[:3, 3])
-            x, y, z, w = Rotation.from_matrix(pose[:3, :3]).as_quat()
-            orientation.x, orientation.y, orientation.z, orientation.w = x, y, z, w
-            message.poses.append(stamped)
         publisher = self.arc_pub if arc else self.line_pub
+        message = path_message(poses, frame)
         return self._next_status(lambda: publisher.publish(message), 20.0)
+
+
+def path_message(poses, frame=''):
+    """Return the ``nav_msgs/Path`` of ``poses`` (each ``(4, 4)``) in ``frame``."""
+    message = Path()
+    message.header.frame_id = frame
+    for pose in poses:
+        stamped = PoseStamped()
+        point, orientation = stamped.pose.position, stamped.pose.orientation
+        point.x, point.y, point.z = (float(v) for v in pose[:3, 3])
+        x, y, z, w = Rotation.from_matrix(pose[:3, :3]).as_quat()
+        orientation.x, orientation.y, orientation.z, orientation.w = x, y, z, w
+        message.poses.append(stamped)
+    return message
 
 
 @contextlib.contextmanager
@@ -291,3 +297,43 @@ def test_a_lost_measured_state_brakes_along_the_line(urdf):
             assert 0.001 < travelled < 0.19  # braked on the way, on the line
     finally:
         end_process(robot)
+
+
+def zigzag(here, count):
+    """``count`` corners 2 mm apart across and 0.5 mm along: a path that is long to plan."""
+    poses = []
+    for index in range(1, count + 1):
+        pose = here.copy()
+        pose[:3, 3] += [0.002 * (index % 2), 0.0005 * index, 0.0]
+        poses.append(pose)
+    return poses
+
+
+def test_a_path_long_to_plan_is_accepted_from_rest_and_stop_does_not_wait_for_it(urdf):
+    """1000 corners take a second or more to plan: accepted; ~/stop meanwhile drops it."""
+    chain = NumpyChain(urdf)
+    with session(urdf) as (_, probe):
+        position = probe.wait_at_rest(20.0)
+        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        status = probe.send(zigzag(here, 1000))
+        assert status.level == DiagnosticStatus.OK, status.message
+        values = {kv.key: kv.value for kv in status.values}
+        assert float(values['planning_time']) > 0.5  # longer than the stream's margins
+        assert probe.stop().success
+        position = probe.wait_at_rest(30.0)
+        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        count = len(probe.statuses)
+        probe.line_pub.publish(path_message(zigzag(here, 1000)))
+        # No event says that the node has begun to plan: 30 stream ticks (0.3 s) of it.
+        ticks = len(probe.states)
+        probe.spin_until(lambda: len(probe.states) >= ticks + 30, 10.0, '30 ticks')
+        stopped = probe.stop()
+        assert stopped.success, stopped.message
+        probe.spin_until(lambda: any(s.message.startswith('cartesian_path') for s in
+                                     probe.statuses[count:]), 60.0, "the path's answer")
+        answers = [s.message for s in probe.statuses[count:]]
+        path = next(index for index, text in enumerate(answers)
+                    if text.startswith('cartesian_path'))
+        assert 'came while it was planned' in answers[path], answers
+        stop = next(index for index, text in enumerate(answers) if 'accepted' in text)
+        assert stop < path  # ~/stop answered before the path it dropped

@@ -181,13 +181,15 @@ class RequestHandler:
         if reason is not None:
             self._answers.refused(request, reason)
             return None
-        placed = self._start_tick.plan_and_splice(request, plan, config)
+        def spliced(start_ns: int, motion: PlannedMotion) -> None:
+            self._on_plan(start_ns, motion)
+            for listener in self._listeners:
+                listener.accepted(request, start_ns)
+
+        placed = self._start_tick.plan_and_splice(request, plan, config, spliced)
         if placed is None:
             return None
         motion, now_ns, start_ns, first_ns = placed
-        self._on_plan(start_ns, motion)
-        for listener in self._listeners:
-            listener.accepted(request, start_ns)
         waited = first_ns - self._now_ns() <= SAMPLE_AFTER_FIRST_NS
         if waited:
             self._stream.wait_published(first_ns, ANSWER_WAIT)
@@ -229,21 +231,27 @@ class RequestHandler:
 
     def _brake(self, config: Config) -> None:
         """Brake from the next tick (after a failure, or when the measured state is lost)."""
-        for _ in range(PLAN_ATTEMPTS):
-            start_ns = self._stream.next_start()
-            state, _ = self._stream.start_state(start_ns, scaled=False)
-            try:
-                motion = plan_stop(config, state, self._stream.running_at(start_ns))
-            except ValueError as error:  # a non-finite state: the stream holds its last
-                self._log_error(f'braking failed: {error!r}')
-                return
-            if self._stream.splice(start_ns, motion) is not None:
-                self._on_plan(start_ns, motion)
-                return
+        with self._start_tick.guard:
+            for _ in range(PLAN_ATTEMPTS):
+                start_ns = self._stream.next_start()
+                state, _ = self._stream.start_state(start_ns, scaled=False)
+                try:
+                    motion = plan_stop(config, state, self._stream.running_at(start_ns))
+                except ValueError as error:  # a non-finite state: the stream holds its last
+                    self._log_error(f'braking failed: {error!r}')
+                    return
+                if self._stream.splice(start_ns, motion) is not None:
+                    self._on_plan(start_ns, motion)
+                    return
 
     def brake(self) -> None:
-        """Brake within the limits from the next tick and hold (no answer: no request)."""
-        with self._lock:
+        """
+        Brake within the limits from the next tick and hold (no answer: no request).
+
+        It does not wait for a request being planned: that one is dropped.
+        """
+        with self._start_tick.guard:
+            self._start_tick.preempt()
             self._brake(self._config())
 
     def reseed(self, target: Callable[[State, bool], np.ndarray | None]) -> bool:
@@ -275,7 +283,8 @@ class RequestHandler:
         The response says when it is at rest, or why it was refused (as ``~/status``
         does: ``stop refused: <reason>``, e.g. while the measured state is awaited).
         """
-        with self._lock:
+        with self._start_tick.guard:  # not the request lock: a request being planned
+            self._start_tick.preempt()  # is dropped, and does not delay the brake
             request = Request('stop', self._answers.values('stop', ''), 0, None)
             motion = self.execute(request, BRAKE)
         response.success = motion is not None

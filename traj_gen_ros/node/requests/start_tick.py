@@ -15,6 +15,7 @@ import collections
 from collections.abc import Callable
 from dataclasses import dataclass
 import statistics
+import threading
 
 import numpy as np
 from traj_gen_ros.core.kinematic_limits import JointError
@@ -36,7 +37,9 @@ from traj_gen_ros.node.stream.stream import Stream
 #: the first tick that is. Else, and after that, from a tick further away: twice the time
 #: the attempt took, and at least twice the margin before (a loaded machine whose planning
 #: times vary widely is caught up with), at most PLAN_ATTEMPTS times in all. Margins are
-#: capped at MAX_MARGIN_NS.
+#: capped at MAX_MARGIN_NS, or twice the attempt where planning takes longer (a long tool
+#: path). A plan from rest whose start passed while the schedule still rests there is
+#: spliced at the next tick as it is: planned from the same setpoint, it is the same plan.
 RECENT = 5
 MAX_MARGIN_NS = 500_000_000
 PLAN_ATTEMPTS = 6
@@ -74,6 +77,11 @@ class StartTick:
         self._now_ns = now_ns
         self._log_error = log_error
         self._elapsed_ns = elapsed_ns
+        #: Held while a motion is spliced in and its listeners told, and by a brake from
+        #: start to end: a brake (``~/stop``, a lost measured state) never waits for a
+        #: request being planned, and a request planned meanwhile is not spliced after it.
+        self.guard = threading.RLock()
+        self._epoch = 0  # brakes so far: a request planned across one is dropped
         # How long the last requests of each (kind, profile, from a moving state), and of
         # any, took to plan (ns).
         self._recent_ns: dict[tuple[str, str, bool], collections.deque[int]] = {}
@@ -81,7 +89,13 @@ class StartTick:
         # How long the last re-plans after a quick miss (warm) took (ns).
         self._warm_ns: dict[tuple[str, str, bool], collections.deque[int]] = {}
 
-    def plan_and_splice(self, request: Request, planner: Planner, config: Config
+    def preempt(self) -> None:
+        """Drop every request being planned now: a brake takes over (call under :attr:`guard`)."""
+        with self.guard:
+            self._epoch += 1
+
+    def plan_and_splice(self, request: Request, planner: Planner, config: Config,
+                        spliced: Callable[[int, PlannedMotion], None] = lambda start, m: None
                         ) -> tuple[PlannedMotion, int, int, int] | None:
         """
         Plan and splice ``request``: the motion, when planned, its start and first tick.
@@ -95,7 +109,11 @@ class StartTick:
         warm one), else from the first tick that is, unless planning took over ``RETRY_PERIODS``
         periods (a long path); then, and after that, from a tick at least twice the last
         attempt's time and twice the last margin away.
+
+        ``spliced(start_ns, motion)`` is called under :attr:`guard` once the motion is in.
+        A request (not a brake) across which :meth:`preempt` was called is refused.
         """
+        epoch = self._epoch
         # Plans from rest are closed forms; from a moving state they take several times
         # longer: each has its own history.
         moving = self._stream.moving_at(self._stream.next_start())
@@ -130,7 +148,19 @@ class StartTick:
             elapsed_ns = self._elapsed_ns() - began
             if quick:  # a re-plan after a quick miss: what the next cold miss expects
                 warm_ns.append(min(elapsed_ns, RETRY_PERIODS * config.period_ns))
-            first_ns = self._stream.splice(start_ns, motion, request)
+            with self.guard:
+                if not planner.commanded and self._epoch != epoch:
+                    self._answers.refused(request, 'a brake (~/stop, or the measured state '
+                                          'lost) came while it was planned: not executed')
+                    return None
+                first_ns = self._stream.splice(start_ns, motion, request)
+                if first_ns is None and _at_rest(state):  # still valid if still there
+                    start_ns = max(request.stamp_ns, self._stream.next_start())
+                    if _same(state, self._stream.start_state(
+                            start_ns, scaled=not planner.commanded)[0]):
+                        first_ns = self._stream.splice(start_ns, motion, request)
+                if first_ns is not None:
+                    spliced(start_ns, motion)
             planning_ns += elapsed_ns
             if first_ns is not None:
                 recent_ns.append(min(elapsed_ns, MAX_MARGIN_NS))
@@ -148,9 +178,21 @@ class StartTick:
                 else:
                     start_ns = max(request.stamp_ns, self._stream.next_start(expected_ns))
             else:
-                margin_ns = min(max(2 * elapsed_ns, 2 * margin_ns), MAX_MARGIN_NS)
+                # At most MAX_MARGIN_NS ahead, unless planning takes longer than that.
+                margin_ns = min(max(2 * elapsed_ns, 2 * margin_ns),
+                                max(MAX_MARGIN_NS, 2 * elapsed_ns))
                 start_ns = max(request.stamp_ns, self._stream.next_start(margin_ns))
         self._answers.refused(request, f'the stream passed its start {PLAN_ATTEMPTS} times '
                               f'while it was planned (the last attempt took '
                               f'{elapsed_ns * 1e-9:.3f} s); resend it')
         return None
+
+
+def _at_rest(state: State) -> bool:
+    """Tell whether ``state`` is at rest (no velocity, no acceleration)."""
+    return not (np.any(state.velocity) or np.any(state.acceleration))
+
+
+def _same(first: State, second: State) -> bool:
+    """Tell whether two setpoints are the same: a plan from one is a plan from the other."""
+    return all(np.array_equal(a, b) for a, b in zip(first, second, strict=True))
