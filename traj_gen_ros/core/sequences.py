@@ -12,6 +12,7 @@ Units: s; rad (or m).
 from __future__ import annotations
 
 from collections.abc import Sequence
+import math
 
 import numpy as np
 from traj_gen_ros.core.trajectory import Trajectory
@@ -42,3 +43,26 @@ def concatenate(trajectories: Sequence[Trajectory]) -> Trajectory:
         coefficients.append(padded)
         start = breakpoints[-1][-1]
     return Trajectory(np.concatenate(breakpoints), np.concatenate(coefficients))
+
+
+def tail(trajectory: Trajectory, start: float) -> Trajectory:
+    """
+    Return ``trajectory`` from ``start`` (s) on, in local time from 0.
+
+    The piece that holds ``start`` is re-expanded about it (a Taylor shift:
+    ``c'_k = Σ_m C(m, k) c_m d^(m-k)``); the later pieces are kept as they are.
+
+    :raises ValueError: ``start`` outside ``[0, duration]``.
+    """
+    if not 0.0 <= start <= trajectory.duration:
+        raise ValueError(f'tail: start {start!r} s is outside [0, {trajectory.duration:g}] s')
+    breakpoints, coefficients = trajectory.shared_pieces
+    piece = int(np.clip(np.searchsorted(breakpoints, start, side='right') - 1, 0,
+                        len(coefficients) - 1))
+    offset = start - breakpoints[piece]
+    degree = coefficients.shape[1] - 1
+    shift = np.array([[math.comb(m, k) * offset ** (m - k) if m >= k else 0.0
+                       for m in range(degree + 1)] for k in range(degree + 1)])
+    first = np.einsum('km,mj->kj', shift, coefficients[piece])
+    kept = np.concatenate([first[None], coefficients[piece + 1:]])
+    return Trajectory(np.concatenate([[0.0], breakpoints[piece + 1:] - start]), kept)

@@ -26,7 +26,7 @@ from traj_gen_ros.core.cartesian.path_refusal import PathRefusal
 from traj_gen_ros.core.cartesian.path_timing import time_path, TimedPath, ToolLimits
 from traj_gen_ros.core.cartesian.samples import IdealPath, JointPath
 from traj_gen_ros.core.cartesian.tool_path import circular_path, straight_path
-from traj_gen_ros.core.sequences import concatenate
+from traj_gen_ros.core.sequences import concatenate, tail
 from traj_gen_ros.core.trajectory import Trajectory
 from traj_gen_ros.node.messages.parsing import RequestError
 from traj_gen_ros.node.planning.motion import PlannedMotion, State
@@ -147,7 +147,12 @@ class AlongPath:
             plan, _ = brake_along(self.tool_path, self.joint_path, self.max_velocity,
                                   self.max_acceleration, self.tool, float(s), speed)
         except ValueError:
-            return None
+            # Already braking as hard as the limits allow (near the end): the plan's own
+            # rest of the path is the brake, where the arm runs at its own speed.
+            _, own = self.timed.path_parameter(local)
+            if abs(float(own) - speed) > 1e-6 * max(float(own), 1e-9):
+                return None
+            return tail(self.timed.trajectory, local)
         return plan
 
 
