@@ -160,6 +160,11 @@ def test_a_line_keeps_the_tool_on_it_within_a_tenth_of_a_millimetre(urdf):
         assert shown.header.frame_id == 'panda_link0' and len(shown.poses) >= 2
         last = shown.poses[-1].pose.position
         assert np.allclose([last.x, last.y, last.z], goal[:3, 3], atol=1e-6)
+        # A joint-space request replaces the path: ~/tool_path is emptied.
+        count = len(probe.tool_paths)
+        assert probe.goal({JOINTS[0]: 0.1})[0].level == DiagnosticStatus.OK
+        probe.spin_until(lambda: len(probe.tool_paths) > count, 10.0, 'the emptied path')
+        assert probe.tool_paths[-1].poses == []
 
 
 def test_stop_and_the_speed_override_mid_line_keep_the_tool_on_it(urdf):
@@ -259,6 +264,14 @@ def test_paths_that_cannot_be_followed_are_refused_before_any_motion(urdf):
             status.message
         status = probe.send([line], frame='no_such_link')
         assert status.level == DiagnosticStatus.ERROR and 'no_such_link' in status.message
+        huge = here.copy()
+        huge[0, 3] = 1e300
+        status = probe.send([line, huge])
+        assert status.level == DiagnosticStatus.ERROR, status.message
+        assert 'poses[1]: position (1e+300' in status.message, status.message
+        status = probe.send([line] * 1001)  # counted before the message is built
+        assert status.message == 'cartesian_path refused: cartesian_path has 1001 poses: ' \
+            'give 1 to 1000', status.message
         assert np.array_equal(probe.wait_at_rest(), position)
 
 

@@ -1,8 +1,10 @@
 """The CDR bytes: the writers match rclpy field by field; the readers take what rclpy wrote."""
 
 from builtin_interfaces.msg import Duration
+from geometry_msgs.msg import PoseStamped
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from nav_msgs.msg import Path
 import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
@@ -11,6 +13,7 @@ from traj_gen_ros.node.messages.wire import (
     joint_names_cdr,
     joint_state_cdr,
     joint_trajectory_cdr,
+    peek_path_poses,
     peek_via_points,
     read_goal,
     read_joint_state,
@@ -128,3 +131,15 @@ def test_read_goal_leaves_what_it_cannot_read_to_rclpy():
     corrupt = bytearray(data)
     corrupt[20:22] = b'\xff\xfe'  # not UTF-8 inside the first name
     assert read_goal(bytes(corrupt)) is None
+
+
+@pytest.mark.parametrize('frame_id', ['', 'panda_link0', 'ü' * 7])
+@pytest.mark.parametrize('count', [0, 1, 3, 1001])
+def test_peek_path_poses_reads_the_frame_and_the_pose_count(frame_id, count):
+    message = Path()
+    message.header.frame_id = frame_id
+    message.header.stamp.sec = 12
+    message.poses = [PoseStamped() for _ in range(count)]
+    data = serialize_message(message)
+    assert peek_path_poses(data) == (frame_id, count)
+    assert peek_path_poses(data[:9]) == ('', 0)  # too short: deserialising refuses it

@@ -246,6 +246,21 @@ def peek_via_points(data: bytes) -> tuple[str, int]:
     return frame_id, count
 
 
+def peek_path_poses(data: bytes) -> tuple[str, int]:
+    """
+    Read ``header.frame_id`` and the number of poses of a CDR ``nav_msgs/Path``.
+
+    Its header as :func:`peek_via_points` reads it, then the uint32 pose count. A message
+    too short to hold them gives ``('', 0)``.
+    """
+    try:
+        frame_id, offset = _read_string(data, 8, 'replace')
+        count = _read_count(data, offset)[0]
+    except (ValueError, struct.error):
+        return '', 0
+    return frame_id, count
+
+
 def factor_cdr(factor: float) -> bytes:
     """Serialise a ``control_msgs/SpeedScalingFactor`` (one float64) to CDR bytes."""
     return _ENCAPSULATION + struct.pack('<d', factor)

@@ -47,6 +47,7 @@ class Answers:
         self._joint_names = joint_names
         self._received = 0
         self._superseded: list[Request] = []
+        self._tool_path_shown = False  # whether ~/tool_path holds a path now
         reliable = ReliabilityPolicy.RELIABLE
         self._trajectory = node.create_publisher(
             JointTrajectory, '~/trajectory',
@@ -91,13 +92,19 @@ class Answers:
         self._trajectory.publish(message)
 
     def publish_tool_path(self, start_ns: int, motion: PlannedMotion, frame_id: str) -> None:
-        """Publish a line's or an arc's tool path (poses in ``frame_id``), stamped ``start_ns``."""
-        if motion.tool_poses is None:
+        """
+        Publish a line's or an arc's tool path (poses in ``frame_id``), stamped ``start_ns``.
+
+        Any other motion that replaces one publishes an empty path once: the latched path
+        is no longer the one the arm follows.
+        """
+        if motion.tool_poses is None and not self._tool_path_shown:
             return
+        self._tool_path_shown = motion.tool_poses is not None
         message = Path()
         message.header.stamp = Time(nanoseconds=start_ns).to_msg()
         message.header.frame_id = frame_id
-        for pose in motion.tool_poses:
+        for pose in () if motion.tool_poses is None else motion.tool_poses:
             stamped = PoseStamped()
             stamped.header = message.header
             position, quaternion = pose_quaternion(pose)

@@ -202,7 +202,7 @@ class RequestHandler:
             return None
         self._answers.publish_trajectory(message)
         chain = config.kinematics.chain
-        if motion.tool_poses is not None and chain is not None:
+        if chain is not None:
             self._answers.publish_tool_path(start_ns, motion, chain.base_frame)
         if not waited and first_ns - now_ns <= ANSWER_WAIT * 1e9:
             self._stream.wait_published(first_ns, ANSWER_WAIT)

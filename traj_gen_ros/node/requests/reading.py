@@ -26,7 +26,7 @@ from traj_gen_ros.node.messages.parsing import (
     seconds,
     too_many_points,
 )
-from traj_gen_ros.node.messages.wire import peek_via_points, read_goal
+from traj_gen_ros.node.messages.wire import peek_path_poses, peek_via_points, read_goal
 from traj_gen_ros.node.planning.pose_goal import PoseRequest
 from traj_gen_ros.node.planning.tool_motion import CIRCULAR_GOAL, ToolPathRequest
 from traj_gen_ros.node.requests.answers import Answers
@@ -120,9 +120,17 @@ def pose_request(data: bytes, received: int, joints: Sequence[str],
 MAX_PATH_POSES = 1000
 
 
+#: Largest |coordinate| (m) of a pose: beyond any arm's reach, and far from float64's range.
+MAX_COORDINATE = 1.0e4
+
+
 def _matrix(pose: Pose) -> np.ndarray:
     """Return a message's pose as ``(4, 4)``; its quaternion checked (norm 1 within 1e-3)."""
     position, orientation = pose.position, pose.orientation
+    values = (position.x, position.y, position.z)
+    if not all(abs(value) <= MAX_COORDINATE for value in values):  # NaN fails too
+        raise ValueError(f'position ({", ".join(f"{v:g}" for v in values)}) m: each '
+                         f'coordinate must be finite and at most {MAX_COORDINATE:g} m')
     return pose_matrix([position.x, position.y, position.z],
                        [orientation.x, orientation.y, orientation.z, orientation.w])
 
@@ -140,6 +148,11 @@ def tool_path_request(kind: str) -> Callable[[bytes, int, Sequence[str], Answers
     def read(data: bytes, received: int, joints: Sequence[str],
              answers: Answers) -> Request | None:
         del joints  # every joint of the chain moves
+        frame_id, count = peek_path_poses(data)
+        if count > MAX_PATH_POSES:  # refused before one Python object per pose is made
+            answers.refused(Request(kind, answers.values(kind, frame_id, received), 0, None),
+                            f'{kind} has {count} poses: give 1 to {MAX_PATH_POSES}')
+            return None
         try:
             message = deserialize_message(data, Path)
         except Exception as error:  # noqa: BLE001 - wire bytes must never kill the node
