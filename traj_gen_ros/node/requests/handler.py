@@ -181,6 +181,7 @@ class RequestHandler:
         if reason is not None:
             self._answers.refused(request, reason)
             return None
+
         def spliced(start_ns: int, motion: PlannedMotion) -> None:
             self._on_plan(start_ns, motion)
             for listener in self._listeners:
