@@ -91,12 +91,10 @@ class RequestHandler:
                  on_plan: Callable[[int, PlannedMotion], None] = lambda start_ns, motion: None
                  ) -> None:
         """
-        Handle requests with the current ``config()``, on the node clock ``now_ns()``.
+        Handle requests with ``config()`` on the node clock ``now_ns()``.
 
-        ``elapsed_ns`` times the planning (ns; a test gives its fake clock). ``refusal()``
-        gives a reason to refuse every request now (no measured state), or ``None``.
-        ``on_plan(start_ns, motion)`` is told every motion spliced in (requests, holds,
-        brakes), e.g. for the ``JointTrajectory`` command output.
+        ``elapsed_ns`` times planning; ``refusal()``: a reason to refuse every request now,
+        or ``None``; ``on_plan(start_ns, motion)``: every motion spliced in.
         """
         self._elapsed_ns = elapsed_ns
         self._refusal = refusal
@@ -107,18 +105,12 @@ class RequestHandler:
         self._now_ns = now_ns
         self._log_error = log_error
         self._last_round = 0.0  # time.monotonic() at the end of the last request callback
-        # Requests come from the request thread and ~/stop from the executor: one at a time.
-        self._lock = threading.Lock()
+        self._lock = threading.Lock()  # one request at a time (the request thread, the action)
         self._start_tick = StartTick(stream, answers, now_ns, log_error, elapsed_ns)
         self._listeners: list[RequestListener] = []
 
     def add_listener(self, listener: RequestListener) -> None:
-        """
-        Tell ``listener`` of every request spliced in and every one dropped before its start.
-
-        ``~/follow_joint_trajectory`` ends the goal a newer request replaced, and aborts
-        its goal when it is dropped.
-        """
+        """Tell ``listener`` of every request spliced in and every one dropped (the action)."""
         self._listeners.append(listener)
 
     # ------------------------------------------------------------------ take and parse
@@ -127,10 +119,8 @@ class RequestHandler:
         """
         Parse ``first`` and every request waiting behind it; execute the newest valid one.
 
-        Each is a ``(serialised message, message info)`` pair (the subscriptions are raw:
-        goals are read off the wire, via points counted before they are deserialised); the
-        info's ``received_timestamp`` (ns, system clock: when DDS received it) goes into
-        the answer as ``received``.
+        Each is a raw ``(message, info)`` pair; the info's ``received_timestamp`` (ns, system
+        clock) goes into the answer as ``received``.
         """
         reader = READERS[topic]
         message_type, parse, planner = reader.message_type, reader.read, reader.planner
