@@ -6,7 +6,10 @@ scipy's CubicSpline, and sampling throughput, each with its target. Then the kin
 (benchmarks/kinematics.py: inverse kinematics p50/p99, forward kinematics per call, beside
 Pinocchio's own calls), the node latency benchmark (benchmarks/node_latency.py) and the
 graph-join benchmark (benchmarks/joins.py: 50 processes joining while the node streams at
-500 Hz, against the node without its transport choice) when they are there.
+500 Hz, against the node without its transport choice) when they are there; lines and arcs
+of the tool (benchmarks/cartesian.py: planning time and a seeded set of 30, beside Pilz's
+way, benchmarks/pilz_peer.py) and the node's stream on the Panda (benchmarks/panda_stream.py:
+while lines are planned, and with ~/tool_pose against without).
 """
 
 import os
@@ -213,6 +216,22 @@ def kinematics() -> None:
                    check=True)
 
 
+def lines_and_arcs() -> None:
+    """Run benchmarks/cartesian.py: lines and arcs beside Pilz's way (issue 30)."""
+    script = Path(__file__).with_name('cartesian.py')
+    if script.exists():
+        sys.stdout.flush()
+        subprocess.run([sys.executable, str(script)], check=True)
+
+
+def panda_stream() -> None:
+    """Run benchmarks/panda_stream.py: the stream while lines are planned, ~/tool_pose."""
+    script = Path(__file__).with_name('panda_stream.py')
+    if script.exists():
+        sys.stdout.flush()
+        subprocess.run([sys.executable, str(script)], check=True)
+
+
 def node_latency() -> None:
     script = Path(__file__).with_name('node_latency.py')
     if script.exists():
@@ -234,5 +253,7 @@ if __name__ == '__main__':
     via_spline()
     sampling()
     kinematics()
+    lines_and_arcs()
     node_latency()
     graph_joins()
+    panda_stream()
