@@ -55,14 +55,17 @@ def pose_matrix(position: Sequence[float],
     return pose
 
 
-def pose_quaternion(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def pose_quaternion(pose: np.ndarray, *, checked: bool = False
+                    ) -> tuple[np.ndarray, np.ndarray]:
     """
     Return ``(position, quaternion)`` of a pose: metres and ``(x, y, z, w)``, ``w >= 0``.
 
     The quaternion comes from the rotation matrix by its largest diagonal term (Shepperd's
-    method, accurate for every rotation).
+    method, accurate for every rotation). ``checked``: the pose is known to be a rigid
+    transform (one :meth:`Chain.forward` made), so :func:`check_pose` is skipped.
     """
-    pose = check_pose(pose)
+    if not checked:
+        pose = check_pose(pose)
     r = pose[:3, :3]
     trace = r[0, 0] + r[1, 1] + r[2, 2]
     choice = int(np.argmax([trace, r[0, 0], r[1, 1], r[2, 2]]))

@@ -39,7 +39,7 @@ class ToolPoseOutput:
         chain = self._kinematics().for_stream()
         if chain is None:
             return
-        point, quaternion = pose_quaternion(chain.forward(position))
+        point, quaternion = pose_quaternion(chain.forward(position), checked=True)
         self._publish(pose_stamped_cdr(self._now_ns(), chain.base_frame, point, quaternion))
 
 
