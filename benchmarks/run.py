@@ -4,7 +4,9 @@ Core speed, measured against named peers in the same run (`make bench`).
 Prints microseconds per plan against ruckig, plan + sample of a via-point spline against
 scipy's CubicSpline, and sampling throughput, each with its target. Then the kinematics
 (benchmarks/kinematics.py: inverse kinematics p50/p99, forward kinematics per call, beside
-Pinocchio's own calls), the node latency benchmark (benchmarks/node_latency.py) and the
+Pinocchio's own calls), what bounding the jerk costs on lines and arcs
+(benchmarks/lines_scurve.py: durations against the acceleration-limited timing), the node
+latency benchmark (benchmarks/node_latency.py) and the
 graph-join benchmark (benchmarks/joins.py: 50 processes joining while the node streams at
 500 Hz, against the node without its transport choice) when they are there; lines and arcs
 of the tool (benchmarks/cartesian.py: planning time and a seeded set of 30, beside Pilz's
@@ -232,6 +234,13 @@ def panda_stream() -> None:
         subprocess.run([sys.executable, str(script)], check=True)
 
 
+def lines_scurve() -> None:
+    """Run benchmarks/lines_scurve.py in its own process (Pinocchio loads only there)."""
+    sys.stdout.flush()
+    subprocess.run([sys.executable, str(Path(__file__).with_name('lines_scurve.py'))],
+                   check=True)
+
+
 def node_latency() -> None:
     script = Path(__file__).with_name('node_latency.py')
     if script.exists():
@@ -254,6 +263,7 @@ if __name__ == '__main__':
     sampling()
     kinematics()
     lines_and_arcs()
+    lines_scurve()
     node_latency()
     graph_joins()
     panda_stream()

@@ -29,6 +29,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from scipy.spatial.transform import Rotation, Slerp
 from std_msgs.msg import Float64MultiArray
 from topp_reference import reference_duration
+from traj_gen_ros.core.cartesian.jerk_limited_timing import time_path_jerk_limited
 from traj_gen_ros.core.cartesian.joint_path import follow
 from traj_gen_ros.core.cartesian.path_timing import ToolLimits
 from traj_gen_ros.core.cartesian.tool_path import straight_path
@@ -165,6 +166,70 @@ def test_a_line_keeps_the_tool_on_it_within_a_tenth_of_a_millimetre(urdf):
         assert probe.goal({JOINTS[0]: 0.1})[0].level == DiagnosticStatus.OK
         probe.spin_until(lambda: len(probe.tool_paths) > count, 10.0, 'the emptied path')
         assert probe.tool_paths[-1].poses == []
+
+
+def test_under_scurve_a_line_keeps_the_tool_on_it_and_every_joint_jerk_bounded(urdf):
+    """Profile scurve: the same checks, and no step of acceleration above the jerk's."""
+    chain, jerk = NumpyChain(urdf), 20.0
+    with session(urdf, profile='scurve', max_jerk=[jerk], blend_radius=0.03) as (_, probe):
+        position = probe.wait_at_rest(20.0)
+        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        goal = here.copy()
+        goal[:3, 3] += [0.15, 0.1, -0.12]
+        goal[:3, :3] = Rotation.from_rotvec([0.0, 0.0, 0.4]).as_matrix() @ here[:3, :3]
+        sent_ns = stamp_ns(probe.latest().header.stamp)
+        status = probe.send([goal])
+        assert status.level == DiagnosticStatus.OK, status.message
+        assert status.message.startswith('accepted: profile=line'), status.message
+        values = {kv.key: kv.value for kv in status.values}
+        assert 'jerk' in values['bounded_by'], values['bounded_by']
+        states = moved(probe, sent_ns)
+        poses = tool_poses(chain, states)
+        distance, angle = line_errors(poses, here, goal)
+        assert distance.max() < 1e-4 and angle.max() < 1e-3, (distance.max(), angle.max())
+        assert np.linalg.norm(poses[-1, :3, 3] - goal[:3, 3]) < 1e-4
+        velocities = np.array([s.velocity for s in states])
+        assert np.abs(velocities).max() <= MAX_VELOCITY * (1 + 1e-9)
+        assert_jerk_bounded(states, jerk)
+        # The core's jerk-limited timing of the same joint path, never below the optimum.
+        core = Chain.from_urdf(urdf, JOINTS, tool_frame=TOOL)
+        path = straight_path(core.forward(position), [goal])
+        joint_path = follow(core, path, position)
+        timed = time_path_jerk_limited(path, joint_path, MAX_VELOCITY, MAX_ACCELERATION,
+                                       jerk, TOOL_LIMITS)
+        duration = float(values['duration'])
+        assert duration == pytest.approx(timed.duration, rel=1e-3), (duration, timed.duration)
+        reference = reference_duration(path, joint_path.joints.sample, MAX_VELOCITY,
+                                       MAX_ACCELERATION, TOOL_LIMITS)
+        assert reference <= duration <= 1.5 * reference, (duration, reference)
+        # ~/stop mid-way back brakes along the line, the jerk still bounded.
+        sent_ns = stamp_ns(probe.latest().header.stamp)
+        assert probe.send([here]).level == DiagnosticStatus.OK
+        probe.spin_until(lambda: np.linalg.norm(probe.latest().velocity) > 0.1, 10.0,
+                         'the motion back')
+        assert probe.stop().success
+        states = moved(probe, sent_ns)
+        poses = tool_poses(chain, states)
+        distance, angle = line_errors(poses, goal, here)
+        assert distance.max() < 1e-4 and angle.max() < 1e-3, (distance.max(), angle.max())
+        assert np.linalg.norm(poses[-1, :3, 3] - here[:3, 3]) > 0.01  # stopped on the way
+        assert_jerk_bounded(states, jerk)
+
+
+def assert_jerk_bounded(states, jerk):
+    """
+    Check the streamed velocities' finite differences against ``jerk`` (rad/s³).
+
+    Stamps are the plan's sampling times: two consecutive mean accelerations differ by at
+    most the jerk limit times the distance between their intervals' centres, whatever
+    the spacing of the ticks.
+    """
+    velocities = np.array([s.velocity for s in states])
+    times = np.array([stamp_ns(s.header.stamp) for s in states]) * 1e-9
+    centres = 0.5 * (times[1:] + times[:-1])
+    accelerations = np.diff(velocities, axis=0) / np.diff(times)[:, None]
+    steps = np.abs(np.diff(accelerations, axis=0))
+    assert np.all(steps <= jerk * np.diff(centres)[:, None] * 1.05 + 1e-5), steps.max()
 
 
 def test_stop_and_the_speed_override_mid_line_keep_the_tool_on_it(urdf):

@@ -31,8 +31,9 @@ class State(NamedTuple):
 class BrakesAlong(Protocol):
     """A plan that brakes along its own path (a line, an arc): the tool stays on it."""
 
-    def brake(self, elapsed: float, velocity: np.ndarray) -> Trajectory | None:
-        """Brake from ``elapsed`` s into the plan at joint ``velocity``; None: not here."""
+    def brake(self, elapsed: float, velocity: np.ndarray,
+              acceleration: np.ndarray | None = None) -> Trajectory | None:
+        """Brake from ``elapsed`` s into the plan at joint ``velocity``, ``acceleration``."""
 
 
 @dataclass(frozen=True)

@@ -142,7 +142,7 @@ def plan_stop(config: Config, state: State,
     """
     plan = None
     if running is not None and running[0].along is not None:
-        plan = running[0].along.brake(running[1], state.velocity)
+        plan = running[0].along.brake(running[1], state.velocity, state.acceleration)
     if plan is None and config.profile == 'scurve':
         plan = scurve_brake(state.position, state.velocity, state.acceleration,
                             config.max_acceleration, config.max_jerk)

@@ -9,8 +9,11 @@ from that rest the core plans the tool's path (:mod:`traj_gen_ros.core.cartesian
 ideal path (straight lines with ``blend_radius`` blends, or the circle through the
 interim point), the joint path that follows it (refused where Craig §7.5's problems
 arise: out of reach, a joint limit, a singularity, a configuration flip) and its
-time-optimal timing under the joint limits and the tool's. The brake and the path are one
-plan, through the pipeline's checks (:data:`PATH`). No ROS here.
+time-optimal timing under the joint limits and the tool's. Under profile ``scurve`` every
+joint's jerk is bounded too (:func:`~traj_gen_ros.core.cartesian.jerk_limited_timing.
+time_path_jerk_limited`): corners are not blended then (the tool stops at each), and a
+brake along the path is jerk-limited. The brake and the path are one plan, through the
+pipeline's checks (:data:`PATH`). No ROS here.
 
 Units: m, rad, s.
 """
@@ -20,6 +23,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from traj_gen_ros.core.cartesian.jerk_limited_brake import brake_from_timing
+from traj_gen_ros.core.cartesian.jerk_limited_timing import (
+    JerkLimitedTimedPath,
+    time_path_jerk_limited,
+)
 from traj_gen_ros.core.cartesian.joint_path import follow
 from traj_gen_ros.core.cartesian.path_brake import brake_along
 from traj_gen_ros.core.cartesian.path_refusal import PathRefusal
@@ -77,13 +85,12 @@ def joint_path_request(config: Config, request: ToolPathRequest, state: State
     """
     Resolve the poses, brake to rest, and follow the tool path from there by joints.
 
-    :raises RequestError: no kinematics, an unknown frame, a path that cannot be drawn
-        (coincident or collinear points) or followed (where and why), or profile scurve.
+    Under profile ``scurve`` the lines' corners are not blended (``blend_radius`` 0: a
+    blend's curvature steps, so no joint's jerk would be bounded on it at speed).
+
+    :raises RequestError: no kinematics, an unknown frame, or a path that cannot be drawn
+        (coincident or collinear points) or followed (where and why).
     """
-    if config.profile == 'scurve':
-        raise RequestError(f'{request.kind} under profile scurve is not supported yet (the '
-                           'jerk bound along a tool path is not implemented): set profile '
-                           'to lspb, cubic or quintic')
     chain = request_chain(config)
     targets = [target_in_base(chain, PoseRequest(request.frame_id, pose), state.position)
                for pose in request.poses]
@@ -94,7 +101,8 @@ def joint_path_request(config: Config, request: ToolPathRequest, state: State
         if request.kind == CIRCULAR_GOAL:
             path = circular_path(start, targets[0], targets[1])
         else:
-            path = straight_path(start, targets, config.blend_radius)
+            path = straight_path(start, targets,
+                                 0.0 if config.profile == 'scurve' else config.blend_radius)
     except ValueError as error:
         raise RequestError(str(error)) from None
     limits = config.limits
@@ -115,7 +123,8 @@ class AlongPath:
     How a planned line or arc brakes along its path (``~/stop``, a lost measured state).
 
     ``offset`` (s) is when the path starts in the plan (after the brake to rest before
-    it); ``timed`` its timing; the limits those it was planned with.
+    it); ``timed`` its timing; the limits those it was planned with. With ``max_jerk``
+    (profile ``scurve``) the brake is jerk-limited too.
     """
 
     tool_path: IdealPath
@@ -125,24 +134,31 @@ class AlongPath:
     max_velocity: np.ndarray
     max_acceleration: np.ndarray
     tool: ToolLimits
+    max_jerk: np.ndarray | None = None
 
-    def brake(self, elapsed: float, velocity: np.ndarray) -> Trajectory | None:
+    def brake(self, elapsed: float, velocity: np.ndarray,
+              acceleration: np.ndarray | None = None) -> Trajectory | None:
         """
         Brake from ``elapsed`` s into the plan at joint ``velocity`` (rad/s), along the path.
 
         The commanded path speed is ``velocity``'s along ``q'(s)`` (the speed override
-        scales ``ṡ``). None where the plan is not on its path then (before it, at its end,
-        at rest): the caller brakes each joint.
+        scales ``ṡ``). Under ``scurve`` the brake starts from the commanded
+        ``acceleration`` (rad/s²) too where given, else from the plan's at the override.
+        None where the plan is not on its path then (before it, at its end, at rest), or
+        no brake along it is found: the caller brakes each joint.
         """
         local = elapsed - self.offset
         if not 0.0 <= local < self.timed.duration:
             return None
         s, _ = self.timed.path_parameter(local)
-        rate = self.joint_path.joints.sample(float(s))[1][0]
+        _, rates, curvatures = self.joint_path.joints.sample(float(s))
+        rate = rates[0]
         norm = float(rate @ rate)
         speed = float(rate @ velocity) / norm if norm > 0.0 else 0.0
         if speed <= 0.0:
             return None
+        if self.max_jerk is not None and isinstance(self.timed, JerkLimitedTimedPath):
+            return self._jerk_limited(local, speed, rate, norm, curvatures[0], acceleration)
         try:
             plan, _ = brake_along(self.tool_path, self.joint_path, self.max_velocity,
                                   self.max_acceleration, self.tool, float(s), speed)
@@ -155,6 +171,31 @@ class AlongPath:
             return tail(self.timed.trajectory, local)
         return plan
 
+    def _jerk_limited(self, local: float, speed: float, rate: np.ndarray, norm: float,
+                      curvature: np.ndarray, acceleration: np.ndarray | None
+                      ) -> Trajectory | None:
+        """
+        Brake with bounded jerk from the commanded ``ṡ`` and ``s̈`` (:func:`brake_from_timing`).
+
+        ``s̈`` is the commanded ``acceleration``'s along ``q'`` (``q̈ = q' s̈ + q'' ṡ²``)
+        where given, else the plan's times the override squared, ``(ṡ / ṡ_plan)²``.
+        """
+        _, planned, planned_acceleration = (float(value) for value in
+                                            self.timed.path_state(local))
+        if acceleration is not None:
+            path_acceleration = float(rate @ (acceleration - curvature * speed ** 2)) / norm
+        else:
+            factor = speed / planned if planned > 0.0 else 1.0
+            path_acceleration = planned_acceleration * factor ** 2
+        try:
+            plan, _ = brake_from_timing(
+                self.timed, self.tool_path, self.joint_path,
+                (self.max_velocity, self.max_acceleration, self.max_jerk), self.tool, local,
+                speed, path_acceleration)
+        except ValueError:
+            return None
+        return plan
+
 
 def _timed(config: Config, state: State, hold_at: np.ndarray, request: JointPathRequest
            ) -> PlannedMotion:
@@ -162,15 +203,26 @@ def _timed(config: Config, state: State, hold_at: np.ndarray, request: JointPath
     del state, hold_at  # the path starts where the brake ends; every joint moves
     tool = ToolLimits(config.max_linear_velocity, config.max_linear_acceleration,
                       config.max_angular_velocity)
-    timed = time_path(request.tool_path, request.joint_path, config.max_velocity,
-                      config.max_acceleration, tool, joint_names=config.joints)
+    jerk = config.max_jerk if config.profile == 'scurve' else None
+    if jerk is None:
+        timed = time_path(request.tool_path, request.joint_path, config.max_velocity,
+                          config.max_acceleration, tool, joint_names=config.joints)
+    else:
+        try:
+            timed = time_path_jerk_limited(request.tool_path, request.joint_path,
+                                           config.max_velocity, config.max_acceleration,
+                                           jerk, tool, joint_names=config.joints)
+        except ValueError as error:
+            raise RequestError(str(error)) from None
     plan = concatenate([request.brake, timed.trajectory])
     end = plan.sample(plan.duration)[0][0]
     knots = request.joint_path.joints.breakpoints
     along = AlongPath(request.tool_path, request.joint_path, timed, request.brake.duration,
-                      config.max_velocity, config.max_acceleration, tool)
-    return PlannedMotion(plan, PROFILE[request.kind], end,
-                         f'speed bounded by {timed.describe(config.joints)}',
+                      config.max_velocity, config.max_acceleration, tool, jerk)
+    note = f'speed bounded by {timed.describe(config.joints)}'
+    if jerk is not None and config.blend_radius > 0.0 and len(request.tool_path.stops) > 2:
+        note += '; corners not blended under profile scurve (the tool stops at each)'
+    return PlannedMotion(plan, PROFILE[request.kind], end, note,
                          tool_poses=request.tool_path.sample(knots).poses(), along=along)
 
 
