@@ -1,11 +1,14 @@
 """
 The data that passes between the tool path, the joint path and the timing.
 
-The path parameter ``s`` is the path's *combined length*: along every piece, metres of
-tool travel and radians of tool rotation combine as ``ds² = |dp|² + (ℓ·dθ)²`` with
+The path parameter ``s`` is the path's *combined length*: along every line and arc,
+metres of tool travel and radians of tool rotation combine as ``ds² = |dp|² + (ℓ·dθ)²`` with
 ``ℓ = 1 m/rad`` (:data:`ROTATION_LENGTH`). A straight line of 0.3 m is 0.3 long; a pure
 rotation of 1 rad is 1 long. Every rate "per unit of path" below is per that unit: per
-metre for a line without rotation, per radian for a rotation in place.
+metre for a line without rotation, per radian for a rotation in place. A blended corner
+(:mod:`.corner_blend`) spans its combined length as a whole, its arc's length and the
+rotation of the legs it cuts: where the tool does not turn ``|dp/ds| = 1`` along it, and
+otherwise ``|dp/ds|² + ℓ²|ω_s|²`` is 1 at its ends and varies across it.
 """
 
 from __future__ import annotations

@@ -9,9 +9,10 @@ way, ``θ <= π``); it is ``S = √(L² + (ℓθ)²)`` long (``ℓ`` =
 :mod:`.rotations`): ``dp/ds = (p1 − p0) / S`` and ``ω_s = log(R1 R0ᵀ) / S`` are constant.
 A pure rotation in place (``L = 0``) is ``ℓθ`` long. An arc (:mod:`.circle`) of radius
 ``ρ`` and angle ``Φ`` is ``S = √((ρΦ)² + (ℓθ)²)`` long, its angle ``φ = Φ f`` and its
-orientation the same slerp by ``f``. Corners are blended by :mod:`.corner_blend` (which
-keeps the ``s`` of the corner it cuts away, so a blended path is as long as the unblended
-one).
+orientation the same slerp by ``f``. Corners are blended by :mod:`.corner_blend`: a
+blend cuts the ends of the two segments it joins and takes an ``s``-range of its own
+combined length (no longer than what it cuts), so a blended path is shorter than the
+unblended one; each line keeps its rates, its ``s`` offset by the blends before it.
 """
 
 from __future__ import annotations
@@ -90,7 +91,8 @@ class ToolPath:
     :ivar pieces: the :class:`Piece` s in order.
     :ivar waypoints: ``(w, 4, 4)`` the poses as given, the start first (for plots: a
         blended corner is not on the path, nor is an arc's interim orientation).
-    :ivar waypoint_s: ``(w,)`` the ``s`` at which the path reaches or rounds each.
+    :ivar waypoint_s: ``(w,)`` the ``s`` at which the path reaches each, or the middle of
+        the blend that rounds it.
     """
 
     def __init__(self, pieces: Sequence[Piece], motions: _Motions, blends: CornerBlends,
@@ -160,8 +162,9 @@ def straight_path(start: np.ndarray, poses: Sequence[np.ndarray],
 
     Each segment as the module says; with ``blend_radius`` (m) positive each corner is
     rounded by :func:`.corner_blend.corner_blend` (``d = min(r, half the shorter
-    segment)``), except a reversal, a corner too sharp for its speeds, and a corner of a
-    rotation in place: there (and everywhere when ``blend_radius`` is 0) the tool stops.
+    segment)``), except a reversal, a sharp corner whose legs turn the tool much beside its
+    short arc, and a corner of a rotation in place: there (and everywhere when
+    ``blend_radius`` is 0) the tool stops.
 
     :raises ValueError: a pose that is not a rigid transform, no poses, a pose repeating
         the one before it (naming ``poses[i]``), a negative or non-finite radius.
@@ -176,33 +179,43 @@ def straight_path(start: np.ndarray, poses: Sequence[np.ndarray],
     waypoints = np.array([check_pose(start, 'straight path: start')] + [
         check_pose(pose, f'straight path: poses[{i}]') for i, pose in enumerate(poses)])
     lengths, translations, distances, turns = _segments(waypoints)  # S, Δp, L, log(R1 R0ᵀ)
-    corner_s = np.concatenate([[0.0], np.cumsum(lengths)])
-    motions = _Motions(corner_s[:-1], waypoints[:-1, :3, :3], turns / lengths[:, None],
-                       waypoints[:-1, :3, 3], translations / lengths[:, None])
     blends: list[CornerBlend | None] = [None]
     for k in range(1, len(poses)):
         legs = [Leg(translations[i] / max(distances[i], SAME_POSITION), distances[i],
                     distances[i] / lengths[i], turns[i] / lengths[i]) for i in (k - 1, k)]
         translating = min(distances[k - 1], distances[k]) >= SAME_POSITION
-        blends.append(corner_blend(corner_s[k], waypoints[k, :3, 3], waypoints[k, :3, :3],
-                                   *legs, blend_radius)
+        blends.append(corner_blend(waypoints[k, :3, 3], waypoints[k, :3, :3], *legs,
+                                   blend_radius)
                       if blend_radius > 0.0 and translating else None)
     blends.append(None)
-    pieces, rows, stops, made = [], [], [0.0], []
+    pieces, rows, stops, made, blend_starts = [], [], [0.0], [], []
+    line_starts, waypoint_s, s = np.zeros(len(poses)), [0.0], 0.0
     for i in range(len(poses)):
-        first = corner_s[i] if blends[i] is None else blends[i].end
-        last = corner_s[i + 1] if blends[i + 1] is None else blends[i + 1].start
-        if last - first > 1e-12 * max(1.0, lengths[i]):
-            pieces.append(Piece('line', pieces[-1].end if pieces else 0.0, float(last), i + 1))
+        entered = 0.0 if blends[i] is None else blends[i].cut[1]
+        left = 0.0 if blends[i + 1] is None else blends[i + 1].cut[0]
+        line_starts[i] = s - entered  # where the whole segment would start
+        rest = float(lengths[i] - entered - left)
+        if rest > 1e-12 * max(1.0, lengths[i]):
+            pieces.append(Piece('line', s, s + rest, i + 1))
             rows.append(i)
-        if blends[i + 1] is not None:
-            pieces.append(Piece('blend', pieces[-1].end, float(blends[i + 1].end), i + 1))
+            s = pieces[-1].end
+        blend = blends[i + 1]
+        if blend is not None:
+            pieces.append(Piece('blend', s, s + float(blend.span), i + 1))
             rows.append(len(made))
-            made.append(blends[i + 1])
-        elif i + 1 < len(poses):
-            stops.append(float(corner_s[i + 1]))
-    stops.append(pieces[-1].end)
-    return ToolPath(pieces, motions, CornerBlends(made), rows, stops, waypoints, corner_s)
+            made.append(blend)
+            blend_starts.append(s)
+            waypoint_s.append(s + blend.span / 2.0)
+            s = pieces[-1].end
+        else:
+            waypoint_s.append(s)
+            if i + 1 < len(poses):
+                stops.append(s)
+    stops.append(s)
+    motions = _Motions(line_starts, waypoints[:-1, :3, :3], turns / lengths[:, None],
+                       waypoints[:-1, :3, 3], translations / lengths[:, None])
+    return ToolPath(pieces, motions, CornerBlends(made, blend_starts), rows, stops,
+                    waypoints, np.array(waypoint_s))
 
 
 def circular_path(start: np.ndarray, interim: np.ndarray, goal: np.ndarray) -> ToolPath:
@@ -229,5 +242,5 @@ def circular_path(start: np.ndarray, interim: np.ndarray, goal: np.ndarray) -> T
     motions = _Motions(np.zeros(1), start[None, :3, :3], (turn / length)[None],
                        start[None, :3, 3], np.zeros((1, 3)), circle, circle.angle / length)
     waypoint_s = np.array([0.0, length * circle.interim_angle / circle.angle, length])
-    return ToolPath([Piece('arc', 0.0, length, 2)], motions, CornerBlends([]), [0],
+    return ToolPath([Piece('arc', 0.0, length, 2)], motions, CornerBlends([], []), [0],
                     [0.0, length], np.array([start, interim, goal]), waypoint_s)
