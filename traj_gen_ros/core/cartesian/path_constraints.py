@@ -30,6 +30,7 @@ from dataclasses import dataclass, fields
 import math
 
 import numpy as np
+from traj_gen_ros.core.cartesian import zero_inertia
 from traj_gen_ros.core.cartesian.samples import IdealPath, JointPath
 from traj_gen_ros.core.trajectory import Trajectory
 
@@ -157,7 +158,10 @@ def joint_states(joints: Trajectory, s: np.ndarray, side: str
     return states[0], states[1], states[2]
 
 
-def path_grid(path: IdealPath, joint_path: JointPath, tool_limited: bool) -> PathGrid:
+def path_grid(path: IdealPath, joint_path: JointPath, tool_limited: bool, *,
+              max_velocity: np.ndarray | None = None,
+              max_acceleration: np.ndarray | None = None,
+              tool_speed: np.ndarray | None = None) -> PathGrid:
     """
     Choose the grid (every knot and stop among it) and sample both paths there.
 
@@ -167,13 +171,25 @@ def path_grid(path: IdealPath, joint_path: JointPath, tool_limited: bool) -> Pat
     the tool point) at the piece's start, middle and end. A constraint held at both ends
     of an interval with ``s̈`` constant loses time in proportion to how much its
     coefficients change over it; these steps keep the duration within 1 % of the optimum
-    (the tests compare it with a 10,000-point phase-plane integration).
+    (the tests compare it with a 10,000-point phase-plane integration). Given the joint
+    limits (``(joints,)`` rad/s, rad/s²; ``tool_speed``: the tool's linear and angular
+    speed limits, ``inf`` for none), the intervals near a zero-inertia point are cut
+    finer (:func:`.zero_inertia.refine`) and both paths sampled again.
     """
     length = float(path.length)
     stops = merge_values(length, path.stops, joint_path.stops)
     knots = merge_values(length, path.knots, joint_path.knots, stops)
     s = _cut(path, joint_path, knots, tool_limited)
-    return sample_grid(path, joint_path, s, nearest_points(s, knots), nearest_points(s, stops))
+    grid = sample_grid(path, joint_path, s, nearest_points(s, knots), nearest_points(s, stops))
+    if max_velocity is None or max_acceleration is None:
+        return grid
+    speeds = np.full(2, np.inf) if tool_speed is None else np.asarray(tool_speed, float)
+    x_max = speed_bounds(grid, np.tile(max_velocity, (len(s), 1)), np.tile(speeds, (len(s), 1)))
+    finer = zero_inertia.refine(s, grid.dq, grid.ddq, x_max, max_acceleration)
+    if len(finer) == len(s):
+        return grid
+    return sample_grid(path, joint_path, finer, nearest_points(finer, knots),
+                       nearest_points(finer, stops))
 
 
 def merge_values(length: float, *sets: np.ndarray) -> np.ndarray:

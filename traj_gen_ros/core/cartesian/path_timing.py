@@ -12,7 +12,10 @@ limits are checked on the path parameter ``s(t)`` at three points inside every i
 (a sampled check: the constraints hold exactly at the grid points).
 
 The grid (:func:`.path_constraints.path_grid`) has every knot and is cut finer where the
-path bends; the duration is within 1 % of the optimum.
+path bends, and around every zero of a joint's ``dq/ds`` where its acceleration limit can
+bind (:mod:`.zero_inertia`: there the constraints held at both ends of an interval pinch
+the speeds, and ``s̈`` dented for an interval or two); the duration is within 1 % of the
+optimum.
 """
 
 from __future__ import annotations
@@ -126,7 +129,9 @@ def time_path(
         raise ValueError(f'tool must be ToolLimits, got {type(tool).__name__}')
     _check_lengths(path, joint_path)
     limits = tool.as_array()
-    grid = path_grid(path, joint_path, tool_limited=bool(np.isfinite(limits).any()))
+    grid = path_grid(path, joint_path, tool_limited=bool(np.isfinite(limits).any()),
+                     max_velocity=velocity, max_acceleration=acceleration,
+                     tool_speed=limits[[0, 2]])
     return _timed(path, grid, velocity, acceleration, limits, names)
 
 

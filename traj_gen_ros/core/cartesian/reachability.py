@@ -15,14 +15,20 @@ row with ``a < 0`` at ``u = (K_{i+1} - x) / 2Δ``: ``x <= P + Q K_{i+1}``). The 
 do not depend on ``K_{i+1}`` and are found for every interval at once (numpy); the last
 is the backward pass, ``K_i = min(S_i, min_l P_l + Q_l K_{i+1})``, a few float operations
 per interval once the lines that can never be the lowest are dropped. The forward pass
-takes the largest ``u`` at each ``x_i``: ``x_{i+1} = min(K_{i+1}, x_i + 2Δ U_hi(x_i))``.
-Every stage is closed form: no linear-programming solver.
+takes the largest ``u`` at each ``x_i``: ``x_{i+1} = min(K_{i+1}, x_i + 2Δ U_hi(x_i))``,
+where the top binds the ``u`` that lands on it exactly. Every stage is closed form: no
+linear-programming solver. A coefficient of ``u`` at rounding level (a grid point on a
+zero of a joint's ``dq/ds``) is taken as 0, a bound of ``x`` alone
+(:func:`_without_negligible`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 from traj_gen_ros.core.cartesian.path_constraints import Stages
+
+#: A row's coefficient of ``s̈`` below this share of its interval's largest counts as 0.
+NEGLIGIBLE = 1e-12
 
 
 def time_optimal_squared_speed(stages: Stages) -> np.ndarray:
@@ -32,6 +38,7 @@ def time_optimal_squared_speed(stages: Stages) -> np.ndarray:
     An interior grid point where ``x`` is 0 cannot be passed without stopping (the caller
     says so); the result is finite wherever the limits bound the speed.
     """
+    stages = _without_negligible(stages)
     twice = 2.0 * stages.delta
     a, b, c = stages.a, stages.b, stages.c
     with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
@@ -41,6 +48,23 @@ def time_optimal_squared_speed(stages: Stages) -> np.ndarray:
         lines = _backward_lines(lower, tops, twice)
         slopes = _forward_lines(upper, tops, twice)
     return _forward(_backward(tops, *lines), twice.tolist(), *slopes)
+
+
+def _without_negligible(stages: Stages) -> Stages:
+    """
+    Set a row's coefficient of ``s̈`` to 0 where it is at rounding level.
+
+    Where a grid point falls on a zero of a joint's ``dq/ds`` its rows bound ``ṡ²`` alone;
+    a coefficient left at ~1e-17 would make each a line so steep that the top of the
+    set pins ``s̈`` there to whatever another row allows (a full deceleration for one
+    interval). Below :data:`NEGLIGIBLE` of the interval's largest it is 0: the bound of
+    ``ṡ²`` (:func:`_static_tops`) holds it.
+    """
+    a = stages.a
+    negligible = (a != 0.0) & (np.abs(a) <= NEGLIGIBLE * np.abs(a).max(axis=1, keepdims=True))
+    if not negligible.any():
+        return stages
+    return Stages(stages.x_max, np.where(negligible, 0.0, a), stages.b, stages.c, stages.delta)
 
 
 def _rows(mask: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray, reach: np.ndarray,
