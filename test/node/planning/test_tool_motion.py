@@ -48,3 +48,27 @@ def test_a_brake_along_a_line_stays_on_it_from_every_instant(panda):
             across = off - (off @ direction)[:, None] * direction
             assert np.linalg.norm(across, axis=1).max() < 1e-5, (fraction, factor)
     assert along.brake(timed.duration + 0.1, np.zeros(7)) is None  # past the path
+
+
+def test_a_brake_along_a_blended_corner_stays_on_the_path(panda):
+    """Through the blend, where the plan itself slows for the arc: the brake never leaves it."""
+    start = panda.forward(READY)
+    corner, goal = start.copy(), start.copy()
+    corner[:3, 3] = [0.407, 0.1, 0.487]
+    goal[:3, 3] = [0.407, -0.1, 0.487]
+    corner[:3, :3] = goal[:3, :3] = np.diag([1.0, -1.0, -1.0])
+    path = straight_path(start, [corner, goal], 0.05)
+    joint_path = follow(panda, path, READY)
+    vmax, amax = np.full(7, 1.0), np.full(7, 2.0)
+    timed = time_path(path, joint_path, vmax, amax, TOOL)
+    along = AlongPath(path, joint_path, timed, 0.0, vmax, amax, TOOL)
+    ideal = path.poses(np.linspace(0.0, path.length, 20001))[:, :3, 3]
+    for elapsed in np.linspace(0.05, timed.duration - 0.05, 13):
+        _, velocity, acceleration = timed.trajectory.sample(elapsed)
+        for factor in (1.0, 0.5):
+            plan = along.brake(elapsed, factor * velocity[0], factor ** 2 * acceleration[0])
+            assert plan is not None, (elapsed, factor)
+            assert limit_violation(plan, vmax, amax) is None
+            tool = panda.forward(plan.sample(np.linspace(0, plan.duration, 60))[0])[:, :3, 3]
+            nearest = np.min(np.linalg.norm(tool[:, None] - ideal[None], axis=2), axis=1)
+            assert nearest.max() < 1e-4, (elapsed, factor, nearest.max())

@@ -26,24 +26,28 @@ from traj_gen_ros.core.cartesian.path_constraints import (
     Stages,
     ToolLimits,
 )
-from traj_gen_ros.core.cartesian.path_timing import grid_motion, joint_trajectory
+from traj_gen_ros.core.cartesian.path_timing import grid_motion, joint_trajectory, TimedPath
 from traj_gen_ros.core.cartesian.samples import IdealPath, JointPath
 from traj_gen_ros.core.kinematic_limits import limit_violation
 from traj_gen_ros.core.trajectory import Trajectory
 
-#: The factors of every limit, one per attempt: the first attempts shave off the quintics'
-#: overshoot between grid points (parts per million), the later ones more.
+#: The factors of the acceleration limits, one per attempt: the first attempts shave off
+#: the quintics' overshoot between grid points (parts per million), the later ones more.
 BACK_OFF = (1.0, 1.0 - 1e-6, 1.0 - 1e-5, 1.0 - 1e-4, 1.0 - 1e-3, 0.99, 0.97, 0.9, 0.8)
 
 
 def brake_along(path: IdealPath, joint_path: JointPath, max_velocity: np.ndarray,
-                max_acceleration: np.ndarray, tool: ToolLimits, s0: float, speed: float
-                ) -> tuple[Trajectory, float]:
+                max_acceleration: np.ndarray, tool: ToolLimits, s0: float, speed: float,
+                timed: TimedPath | None = None) -> tuple[Trajectory, float]:
     """
     Return the brake from ``s0`` at ``ṡ = speed`` to rest along the path, and where it rests.
 
     The trajectory is in local time from 0 (joints, as ``joint_path``); it starts at
     ``q(s0)`` with velocity ``q'(s0)·speed`` and ends at rest at ``q(s_end)``.
+
+    ``timed``: the path's own timing, where the brake starts on it. The brake then runs on
+    its grid and never faster than it: where the plan itself slows down as hard as the
+    limits allow (before a tighter stretch), the brake is the plan there, exactly.
 
     :raises ValueError: ``speed`` < 0, or no brake within the limits was found (the caller
         brakes each joint instead).
@@ -52,16 +56,26 @@ def brake_along(path: IdealPath, joint_path: JointPath, max_velocity: np.ndarray
         raise ValueError(f'brake_along: speed {speed!r} must be >= 0')
     length = float(path.length)
     s0 = min(max(float(s0), 0.0), length)
-    full = path_grid(path, joint_path, tool_limited=bool(np.isfinite(tool.as_array()).any()))
-    ahead = full.s[full.s > s0 + 1e-12 * length]
-    if speed == 0.0 or ahead.size == 0:
-        raise ValueError('brake_along: nothing to brake (at rest, or at the end)')
     velocity = np.asarray(max_velocity, dtype=float)
     acceleration = np.asarray(max_acceleration, dtype=float)
     limits = tool.as_array()
-    for scale in BACK_OFF:
+    if timed is None:
+        full = path_grid(path, joint_path, tool_limited=bool(np.isfinite(limits).any()),
+                         max_velocity=velocity, max_acceleration=acceleration,
+                         tool_speed=limits[[0, 2]]).s
+    else:
+        full = timed.s
+    ahead = full[full > s0 + 1e-12 * length]
+    if ahead.size >= 2 and ahead[0] - s0 < 0.5 * (ahead[1] - ahead[0]):
+        ahead = ahead[1:]  # no sliver of an interval first: its quintic would be stiff
+    if speed == 0.0 or ahead.size == 0:
+        raise ValueError('brake_along: nothing to brake (at rest, or at the end)')
+    cap = None
+    if timed is not None:  # never faster than the plan: ṡ² at the grid ahead
+        cap = np.concatenate([[speed * speed], np.interp(ahead, timed.s, timed.speed ** 2)])
+    for scale in BACK_OFF:  # the accelerations only: the speed may be at its bound already
         plan = _attempt(path, joint_path, np.concatenate([[s0], ahead]), speed,
-                        velocity * scale, acceleration * scale, limits * scale)
+                        velocity, acceleration * scale, limits * [1.0, scale, 1.0], cap)
         if plan is not None and limit_violation(plan[0], velocity, acceleration) is None:
             return plan
     raise ValueError('brake_along: no brake along the path within the limits stops before '
@@ -69,9 +83,13 @@ def brake_along(path: IdealPath, joint_path: JointPath, max_velocity: np.ndarray
 
 
 def _attempt(path: IdealPath, joint_path: JointPath, s: np.ndarray, speed: float,
-             velocity: np.ndarray, acceleration: np.ndarray, tool: np.ndarray
-             ) -> tuple[Trajectory, float] | None:
-    """Decelerate as hard as the (scaled) limits allow from ``s[0]``; None: not at rest."""
+             velocity: np.ndarray, acceleration: np.ndarray, tool: np.ndarray,
+             cap: np.ndarray | None = None) -> tuple[Trajectory, float] | None:
+    """
+    Decelerate as hard as the (scaled) limits allow from ``s[0]``; None: not at rest.
+
+    ``cap``: the largest ``ṡ²`` at each point of ``s`` (the plan's own), or None.
+    """
     grid = _grid(path, joint_path, s)
     stages = _stages(grid, velocity, acceleration, tool)
     a, b, c, twice = stages.a, stages.b, stages.c, 2.0 * stages.delta
@@ -83,15 +101,16 @@ def _attempt(path: IdealPath, joint_path: JointPath, s: np.ndarray, speed: float
         if following <= 0.0:  # at rest inside this interval: end the grid there
             end = float(s[index] + x[-1] / (-2.0 * lowest))
             cut = np.concatenate([s[:index + 1], [end]])
-            if end - s[index] <= 1e-12 * path.length:
-                cut, x = s[:index + 1], x[:-1] + [0.0]
-                if len(cut) < 2:
-                    return None
+            if index > 0 and end - s[index] < 0.5 * (s[index] - s[index - 1]):
+                # No sliver last: the rest is reached over the interval before it too.
+                cut, x = np.concatenate([s[:index], [end]]), x[:-1]
             grid = _grid(path, joint_path, cut)
             squared = np.array(x + [0.0] if len(x) < len(cut) else x)
             u, times = grid_motion(grid, squared)
             return joint_trajectory(grid, squared, u, times), float(cut[-1])
-        x.append(min(following, float(stages.x_max[index + 1])))
+        bound = float(stages.x_max[index + 1]) if cap is None else \
+            min(float(stages.x_max[index + 1]), float(cap[index + 1]))
+        x.append(min(following, bound))
     return None  # the path ended first: the timing's own end brakes there
 
 

@@ -161,7 +161,8 @@ class AlongPath:
             return self._jerk_limited(local, speed, rate, norm, curvatures[0], acceleration)
         try:
             plan, _ = brake_along(self.tool_path, self.joint_path, self.max_velocity,
-                                  self.max_acceleration, self.tool, float(s), speed)
+                                  self.max_acceleration, self.tool, float(s), speed,
+                                  self.timed)
         except ValueError:
             # Already braking as hard as the limits allow (near the end): the plan's own
             # rest of the path is the brake, where the arm runs at its own speed.
