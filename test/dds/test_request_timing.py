@@ -130,20 +130,41 @@ def test_a_plan_the_stream_overtook_restarts_from_the_published_setpoint(node):
     assert rig.statuses[-1][0] == DiagnosticStatus.OK
 
 
+def test_a_plan_from_rest_the_stream_overtook_starts_at_the_next_tick_unplanned(node):
+    """From rest and still at rest there, a plan is the same plan a tick later."""
+    rig = Rig(node)
+    rig.tick()
+    motion, calls = goal(rig, [0.5, -0.2], planning_ticks=3)
+    assert motion is not None and len(calls) == 1  # not planned again
+    start = rig.tick()
+    trajectory = deserialize_message(rig.trajectories[-1], JointTrajectory)
+    assert trajectory.header.stamp.sec * 10**9 + trajectory.header.stamp.nanosec == start
+    assert trajectory.points[0].velocities.tolist() == [0.0, 0.0]
+    assert rig.statuses[-1][0] == DiagnosticStatus.OK
+
+
 def test_a_request_overtaken_every_time_is_refused_with_the_reason(node):
     rig = Rig(node)
     rig.tick()
-    request = parse_goal(JOINTS, JOINTS, [0.5, -0.2])
+    goal(rig, [100.0, -100.0], planning_ticks=0)  # long on its way: every plan ages
+    for _ in range(5):
+        rig.tick()
+    request = parse_goal(JOINTS, JOINTS, [-0.5, 0.2])
+    attempts = []
 
     def always_late(config, state, hold_at, parsed):
-        for _ in range(MAX_MARGIN_NS // PERIOD + 2):  # beyond any start it was given
+        # Each attempt three times as long as the last, from beyond the longest margin: past
+        # any start it was given (the margins are twice the last attempt).
+        attempts.append(state)
+        for _ in range((MAX_MARGIN_NS // PERIOD + 2) * 3 ** (len(attempts) - 1)):
             rig.tick()
         return plan_request(config, state, hold_at, parsed)
     values = rig.answers.values('goal', '', 0)
     assert rig.handler.execute(Request('goal', values, 0, request), Planner(always_late)) is None
     level, text, _ = rig.statuses[-1]
     assert level == DiagnosticStatus.ERROR and 'passed its start 6 times' in text
-    assert rig.state()[1].tolist() == [0.0, 0.0]  # still holding
+    rig.tick()
+    assert np.all(rig.state()[1] > [0.0, -np.inf]) and rig.state()[1][1] < 0.0  # on its way
 
 
 def test_margins_from_rest_and_from_a_moving_state_are_kept_apart(node):
