@@ -397,7 +397,10 @@ def test_a_path_long_to_plan_is_accepted_from_rest_and_stop_does_not_wait_for_it
         assert status.level == DiagnosticStatus.OK, status.message
         values = {kv.key: kv.value for kv in status.values}
         assert float(values['planning_time']) > 0.5  # longer than the stream's margins
+        probe.spin_until(lambda: probe.trajectories, 20.0, "the path's ~/trajectory")
+        plans = len(probe.trajectories)
         assert probe.stop().success
+        probe.spin_until(lambda: len(probe.trajectories) > plans, 20.0, "the stop's plan")
         position = probe.wait_at_rest(30.0)
         here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
         count = len(probe.statuses)
