@@ -56,6 +56,7 @@ import threading
 import time
 
 import numpy as np
+import numpy.ma  # noqa: F401 - np.unique's first call imports it: loaded before gc.freeze()
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -100,8 +101,13 @@ CONFIG_PARAMETERS = ('joints', 'rate_hz', 'profile', 'via_velocities', 'max_velo
                      'max_acceleration', 'lspb_acceleration', 'max_jerk', 'angle_wraparound',
                      'blend_radius', 'max_linear_velocity', 'max_linear_acceleration',
                      'max_angular_velocity')
-#: The executor thread gets the GIL back to the stream thread this often (s).
-SWITCH_INTERVAL = 0.0001
+#: A thread waiting for the GIL asks its holder for it after this long (s) without a
+#: switch: the stream thread gets it from a planning thread within about this (plus the
+#: hand-over). Each time the holder lets the GIL go and takes it back (numpy on more than
+#: 500 elements, LAPACK) the wait starts again, so planning kept the stream waiting for
+#: several 0.1 ms intervals; at 20 µs the 500 Hz p99 period while lines are planned fell
+#: from 2.35–2.45 to 2.14–2.20 ms (benchmarks/panda_stream.py, docs/node-design.md).
+SWITCH_INTERVAL = 0.00002
 #: The spin loop checks this often (s) whether SIGINT/SIGTERM asked it to end.
 SIGNAL_POLL = 0.1
 
@@ -313,7 +319,10 @@ def main(args: list[str] | None = None) -> int:
     sys.setswitchinterval(SWITCH_INTERVAL)
     node = None
     status = 0
-    gc.collect()  # before the stream runs: a full collection holds the GIL for ~30 ms
+    # Before the stream runs: a full collection holds the GIL for ~30 ms. numpy.ma is loaded
+    # by now (imported above): np.unique's first call would take 14 ms importing it on the
+    # request thread, in the node's first line or arc (benchmarks/panda_stream.py).
+    gc.collect()
     try:
         node = TrajectoryGenerator()
         node.get_logger().info(transport)

@@ -13,6 +13,7 @@ from traj_gen_ros.node.messages.wire import (
     joint_names_cdr,
     joint_state_cdr,
     joint_trajectory_cdr,
+    path_cdr,
     peek_path_poses,
     peek_via_points,
     read_goal,
@@ -143,3 +144,24 @@ def test_peek_path_poses_reads_the_frame_and_the_pose_count(frame_id, count):
     data = serialize_message(message)
     assert peek_path_poses(data) == (frame_id, count)
     assert peek_path_poses(data[:9]) == ('', 0)  # too short: deserialising refuses it
+
+
+@settings(max_examples=150, deadline=None)
+@given(frame_id=st.text(max_size=11), count=st.integers(0, 5),
+       stamp_ns=st.integers(0, 2**31 * 10**9 - 1), seed=st.integers(0, 99))
+def test_path_bytes_match_rclpy(frame_id, count, stamp_ns, seed):
+    rng = np.random.default_rng(seed)
+    positions = rng.normal(size=(count, 3)) * 10.0 ** rng.integers(-300, 300, size=(count, 3))
+    quaternions = rng.normal(size=(count, 4))
+    wire = path_cdr(stamp_ns, frame_id, positions, quaternions)
+    expected = Path()
+    expected.header.frame_id = frame_id
+    expected.header.stamp.sec, expected.header.stamp.nanosec = divmod(stamp_ns, 10**9)
+    for position, quaternion in zip(positions, quaternions, strict=True):
+        pose = PoseStamped(header=expected.header)
+        point, orientation = pose.pose.position, pose.pose.orientation
+        point.x, point.y, point.z = position.tolist()
+        orientation.x, orientation.y, orientation.z, orientation.w = quaternion.tolist()
+        expected.poses.append(pose)
+    assert deserialize_message(wire, Path) == expected
+    assert len(wire) == len(serialize_message(expected))  # same layout, padding included

@@ -54,6 +54,7 @@ from traj_gen_ros.node.planning.pipeline import plan_request, plan_stop
 from traj_gen_ros.node.planning.pose_goal import plan_pose
 from traj_gen_ros.node.planning.tool_motion import CARTESIAN_PATH, CIRCULAR_GOAL, plan_tool_path
 from traj_gen_ros.node.requests.answers import Answers
+from traj_gen_ros.node.requests.collection import QuietCollection
 from traj_gen_ros.node.requests.reading import (
     goal_request,
     pose_request,
@@ -96,18 +97,15 @@ class RequestHandler:
         ``elapsed_ns`` times planning; ``refusal()``: a reason to refuse every request now,
         or ``None``; ``on_plan(start_ns, motion)``: every motion spliced in.
         """
-        self._elapsed_ns = elapsed_ns
-        self._refusal = refusal
-        self._on_plan = on_plan
-        self._config = config
-        self._stream = stream
-        self._answers = answers
-        self._now_ns = now_ns
-        self._log_error = log_error
+        self._elapsed_ns, self._refusal, self._on_plan = elapsed_ns, refusal, on_plan
+        self._config, self._stream, self._answers = config, stream, answers
+        self._now_ns, self._log_error = now_ns, log_error
         self._last_round = 0.0  # time.monotonic() at the end of the last request callback
         self._lock = threading.Lock()  # one request at a time (the request thread, the action)
         self._start_tick = StartTick(stream, answers, now_ns, log_error, elapsed_ns)
         self._listeners: list[RequestListener] = []
+        self._collection = QuietCollection(  # no collection while the GIL is in demand
+            stream, now_ns, lambda: min(2e-9 * config().period_ns, ANSWER_WAIT))
 
     def add_listener(self, listener: RequestListener) -> None:
         """Tell ``listener`` of every request spliced in and every one dropped (the action)."""
@@ -125,7 +123,7 @@ class RequestHandler:
         reader = READERS[topic]
         message_type, parse, planner = reader.message_type, reader.read, reader.planner
         try:
-            with self._lock:
+            with self._collection.deferred(), self._lock:
                 self._take_newest(subscription, message_type, first, parse, planner)
         finally:
             self._pace()
@@ -202,7 +200,7 @@ class RequestHandler:
 
     def submit(self, request: Request, plan: Planner) -> PlannedMotion | None:
         """:meth:`execute`, one request at a time with the others (for the action server)."""
-        with self._lock:
+        with self._collection.deferred(), self._lock:
             return self.execute(request, plan)
 
     def dropped(self, requests: Sequence[object], reason: str) -> None:
