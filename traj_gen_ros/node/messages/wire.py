@@ -60,8 +60,13 @@ def _point_dtype(joint_count: int, starts_on_eight: bool,
 
 
 def _write_string(text: str, offset: int) -> bytes:
-    """Encode a CDR string written at payload ``offset`` (a multiple of 4)."""
-    encoded = text.encode() + b'\x00'
+    """
+    Encode a CDR string written at payload ``offset`` (a multiple of 4).
+
+    Cut at the first NUL, as rclpy's conversion to a C string cuts it, so the bytes match
+    what ``serialize_message`` writes for the same text.
+    """
+    encoded = text.split('\x00', 1)[0].encode() + b'\x00'
     padding = (-(offset + 4 + len(encoded))) % 4
     return len(encoded).to_bytes(4, 'little') + encoded + b'\x00' * padding
 
