@@ -25,7 +25,8 @@ gaps, how many joins (and controls) saw a gap over 3 periods and over 100 ms, th
 own count of late ticks and how long they held its stream back (``/diagnostics``), and
 the largest position step against what ``max_velocity`` allows in ``LATE_PERIODS``
 periods (1 at most: no jump). Target: with the node's defaults, the largest gap in the
-joins at most 3 periods.
+joins at most 3 periods. Beside each run, the machine's floor (``benchmarks/wake_floor.py``):
+a real-time loop at the same rate with no ROS, whose largest gap no stream can beat.
 
 The nodes run without ``ROS_AUTOMATIC_DISCOVERY_RANGE`` (ROS 2's default, ``SUBNET``);
 this process and the joiners discover with ``LOCALHOST``, as the test harness does (with
@@ -62,6 +63,7 @@ from sensor_msgs.msg import JointState  # noqa: E402
 from traj_gen_ros.node.stream.clock import LATE_PERIODS  # noqa: E402
 
 JOINER = Path(__file__).with_name('joiner.py')
+FLOOR = Path(__file__).with_name('wake_floor.py')
 #: The nodes side by side: name → what is added to the environment.
 NODES = {'defaults': {}, 'shm': {'FASTDDS_BUILTIN_TRANSPORTS': 'DEFAULT'}}
 LABELS = {'defaults': "the node's defaults",
@@ -177,6 +179,9 @@ def run(joins: int = 50, rate_hz: float = 500.0, names: list[str] | None = None)
     joiner_env = dict(node_env())
     joiner_env.pop('FASTDDS_BUILTIN_TRANSPORTS', None)
     windows, controls, failed, results = [], [], 0, {}
+    floor = subprocess.Popen([sys.executable, str(FLOOR), '--rate', str(rate_hz)],
+                             env={**os.environ, 'PYTHONPATH': str(REPO)},
+                             stdout=subprocess.PIPE, text=True)
     try:
         recorder = Recorder(names)
         recorder.spin_until(lambda: recorder.count() > rate_hz and all(
@@ -218,6 +223,8 @@ def run(joins: int = 50, rate_hz: float = 500.0, names: list[str] | None = None)
                    for name in names}
         recorder.destroy_node()
     finally:
+        floor.terminate()
+        machine = json.loads(floor.communicate(timeout=30)[0] or '{}')
         rclpy.shutdown()
         for name, node in nodes.items():
             code = node.stop()
@@ -225,6 +232,8 @@ def run(joins: int = 50, rate_hz: float = 500.0, names: list[str] | None = None)
             node.close()
             if name in results:
                 results[name].update(exit_code=code, traceback='Traceback' in output)
+    for figures_of_node in results.values():
+        figures_of_node['floor'] = machine
     return {'rate_hz': rate_hz, 'joins': joins, 'joins_failed': failed, 'nodes': results}
 
 
@@ -268,6 +277,12 @@ def main() -> None:
               f'100 ms: {f["controls_over_100_ms"]}/{args.joins}; '
               f'late ticks {f["late_ticks"]} (held back {f["held_back_s"]} s); largest step '
               f'{f["largest_step_vs_limit"]} of max_velocity x {LATE_PERIODS} periods')
+        floor = f['floor']
+        print(f"    the machine's floor in the same run (benchmarks/wake_floor.py: a "
+              f'{floor.get("priority")} loop at the same rate, no ROS): largest gap '
+              f'{floor.get("largest_gap_ms")} ms ({floor.get("largest_gap_periods")} periods), '
+              f'{floor.get("gaps_over_3_periods")} of {floor.get("wakeups")} wake-ups over '
+              f'{TARGET_PERIODS} periods')
         if f.get('exit_code') or f.get('traceback'):
             print(f'    PROBLEM: exit {f.get("exit_code")}, traceback {f.get("traceback")}')
 
