@@ -35,7 +35,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / 'test' / 'support'))  # the tests' fetcher of the URDFs
 
 from cartesian_cases import Case, cases, PANDA_READY, SEED  # noqa: E402
-from example_robot_data import urdfs_in  # noqa: E402
+from example_robot_data import benchmark_urdfs  # noqa: E402
 import numpy as np  # noqa: E402
 import pilz_peer  # noqa: E402
 from traj_gen_ros.core.cartesian.joint_path import follow  # noqa: E402
@@ -265,9 +265,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
     parser.add_argument('--repeats', type=int, default=30)
     args = parser.parse_args()
-    found = urdfs_in(REPO / '.pytest_cache' / 'd')
-    if isinstance(found, str):
-        print(f'== lines and arcs: skipped, {found}')
+    found = benchmark_urdfs('lines and arcs')
+    if found is None:
         return
     robots = robots_from(found)
     line_speed(robots['panda'], args.repeats)

@@ -35,7 +35,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / 'test' / 'support'))
 
 from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
-from example_robot_data import urdfs_in  # noqa: E402
+from example_robot_data import benchmark_urdfs  # noqa: E402
 from geometry_msgs.msg import PoseStamped  # noqa: E402
 from kinematics import seconds_per_call  # noqa: E402 - benchmarks/kinematics.py
 from nav_msgs.msg import Path as PathMessage  # noqa: E402
@@ -255,9 +255,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
     parser.add_argument('--seconds', type=float, default=8.0)
     args = parser.parse_args()
-    found = urdfs_in(REPO / '.pytest_cache' / 'd')
-    if isinstance(found, str):
-        print(f'== the node on the Panda: skipped, {found}')
+    found = benchmark_urdfs('the node on the Panda')
+    if found is None:
         return 0
     urdf = found['panda'].read_text()
     chain = Chain.from_urdf(urdf, JOINTS)

@@ -23,6 +23,7 @@ from numpy_chain import NumpyChain, rpy_matrix, transform
 from pybullet_urdfs import pybullet_urdfs
 import pytest
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from tool_at_rest import tool_at_rest
 
 JOINTS = [f'panda_joint{index}' for index in range(1, 8)]
 READY = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]
@@ -97,12 +98,6 @@ def errors(first, second):
     return float(np.linalg.norm(first[:3, 3] - second[:3, 3])), angle
 
 
-def tool_at_rest(probe, chain, link=TOOL):
-    """Wait for the node at rest; return its joint positions and the link's pose there."""
-    position = probe.wait_at_rest(20.0)
-    return position, chain.pose(link, dict(zip(JOINTS, position, strict=True)))
-
-
 def test_a_pose_goal_ends_within_a_tenth_of_a_millimetre_and_a_milliradian(urdf):
     chain = NumpyChain(urdf)
     with session(urdf) as (node, probe):
@@ -112,7 +107,7 @@ def test_a_pose_goal_ends_within_a_tenth_of_a_millimetre_and_a_milliradian(urdf)
         probe.spin_until(lambda: probe.diagnostics, 10.0, '/diagnostics')
         values = {kv.key: kv.value for kv in probe.diagnostics[-1].status[0].values}
         assert values['kinematics'].startswith(f'kinematic chain {BASE} -> {TOOL}')
-        start, here = tool_at_rest(probe, chain)
+        start, here = tool_at_rest(probe, chain, JOINTS, TOOL)
         target = here @ transform(rpy_matrix(0.1, -0.15, 0.2), np.zeros(3))
         target[:3, 3] += [0.06, -0.08, -0.1]
         status = probe.pose_goal(target)
@@ -120,7 +115,7 @@ def test_a_pose_goal_ends_within_a_tenth_of_a_millimetre_and_a_milliradian(urdf)
         values = {kv.key: kv.value for kv in status.values}
         assert values['request'] == 'pose_goal'
         goal = np.array([float(values[name]) for name in JOINTS])
-        final, reached = tool_at_rest(probe, chain)
+        final, reached = tool_at_rest(probe, chain, JOINTS, TOOL)
         assert np.allclose(final, goal, atol=1e-9)  # the joint goal the answer said
         distance, angle = errors(reached, target)
         assert distance < 1e-4 and angle < 1e-3, (distance, angle)
@@ -130,22 +125,22 @@ def test_a_pose_goal_ends_within_a_tenth_of_a_millimetre_and_a_milliradian(urdf)
 def test_a_jog_in_the_tool_frame_and_a_pose_in_another_links_frame(urdf):
     chain = NumpyChain(urdf)
     with session(urdf) as (_, probe):
-        _, here = tool_at_rest(probe, chain)
+        _, here = tool_at_rest(probe, chain, JOINTS, TOOL)
         jog = np.eye(4)
         jog[2, 3] = 0.05  # 5 cm along the tool's own z
         assert probe.pose_goal(jog, TOOL).level == DiagnosticStatus.OK
-        _, reached = tool_at_rest(probe, chain)
+        _, reached = tool_at_rest(probe, chain, JOINTS, TOOL)
         distance, angle = errors(reached, here @ jog)
         assert distance < 1e-4 and angle < 1e-3, (distance, angle)
         assert np.linalg.norm(reached[:3, 3] - here[:3, 3]) == pytest.approx(0.05, abs=1e-4)
         # The tool pose given in panda_link5's frame at the start of the motion.
-        position, _ = tool_at_rest(probe, chain)
+        position, _ = tool_at_rest(probe, chain, JOINTS, TOOL)
         values = dict(zip(JOINTS, position, strict=True))
         relative = np.linalg.inv(chain.pose('panda_link5', values)) @ reached
         relative[:3, 3] += [0.0, 0.02, 0.0]
         expected = chain.pose('panda_link5', values) @ relative
         assert probe.pose_goal(relative, 'panda_link5').level == DiagnosticStatus.OK
-        _, reached = tool_at_rest(probe, chain)
+        _, reached = tool_at_rest(probe, chain, JOINTS, TOOL)
         distance, angle = errors(reached, expected)
         assert distance < 1e-4 and angle < 1e-3, (distance, angle)
 
@@ -169,7 +164,7 @@ def test_tool_pose_is_the_setpoints_tool_pose_in_the_base_frame(urdf):
 def test_refusals_say_why_and_change_nothing(urdf):
     chain = NumpyChain(urdf)
     with session(urdf) as (_, probe):
-        start, here = tool_at_rest(probe, chain)
+        start, here = tool_at_rest(probe, chain, JOINTS, TOOL)
         far = here.copy()
         far[:3, 3] = [2.0, 0.0, 0.5]
         cases = [
@@ -199,7 +194,7 @@ def test_traj_gen_pose_moves_the_node_and_prints_its_answer(urdf):
     """The CLI's ``pose`` against the real node: a 3 cm jog along the tool's z, --wait."""
     chain = NumpyChain(urdf)
     with session(urdf) as (_, probe):
-        start, here = tool_at_rest(probe, chain)
+        start, here = tool_at_rest(probe, chain, JOINTS, TOOL)
         result = subprocess.run(
             [sys.executable, '-m', 'traj_gen_ros.cli.main', 'pose', '0', '0', '0.03',
              '--frame', TOOL, '--wait', '--timeout', '60'], cwd=REPO, env=node_env(),
@@ -210,6 +205,6 @@ def test_traj_gen_pose_moves_the_node_and_prints_its_answer(urdf):
         jog[2, 3] = 0.03
         probe.spin_until(lambda: not np.array_equal(probe.position(), start), 10.0,
                          'the motion in this process')
-        _, reached = tool_at_rest(probe, chain)
+        _, reached = tool_at_rest(probe, chain, JOINTS, TOOL)
         distance, angle = errors(reached, here @ jog)
         assert distance < 1e-4 and angle < 1e-3, (distance, angle)

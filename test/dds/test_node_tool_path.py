@@ -28,6 +28,7 @@ import pytest
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from scipy.spatial.transform import Rotation, Slerp
 from std_msgs.msg import Float64MultiArray
+from tool_at_rest import tool_at_rest
 from topp_reference import reference_duration
 from traj_gen_ros.core.cartesian.jerk_limited_timing import time_path_jerk_limited
 from traj_gen_ros.core.cartesian.joint_path import follow
@@ -129,8 +130,7 @@ def moved(probe, start_ns):
 def test_a_line_keeps_the_tool_on_it_within_a_tenth_of_a_millimetre(urdf):
     chain = NumpyChain(urdf)
     with session(urdf) as (_, probe):
-        position = probe.wait_at_rest(20.0)
-        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        position, here = tool_at_rest(probe, chain, JOINTS, TOOL)
         goal = here.copy()
         goal[:3, 3] += [0.15, 0.1, -0.12]
         goal[:3, :3] = Rotation.from_rotvec([0.0, 0.0, 0.4]).as_matrix() @ here[:3, :3]
@@ -172,8 +172,7 @@ def test_under_scurve_a_line_keeps_the_tool_on_it_and_every_joint_jerk_bounded(u
     """Profile scurve: the same checks, and no step of acceleration above the jerk's."""
     chain, jerk = NumpyChain(urdf), 20.0
     with session(urdf, profile='scurve', max_jerk=[jerk], blend_radius=0.03) as (_, probe):
-        position = probe.wait_at_rest(20.0)
-        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        position, here = tool_at_rest(probe, chain, JOINTS, TOOL)
         goal = here.copy()
         goal[:3, 3] += [0.15, 0.1, -0.12]
         goal[:3, :3] = Rotation.from_rotvec([0.0, 0.0, 0.4]).as_matrix() @ here[:3, :3]
@@ -236,8 +235,7 @@ def test_stop_and_the_speed_override_mid_line_keep_the_tool_on_it(urdf):
     chain = NumpyChain(urdf)
     # Gentle joint accelerations: a brake of each joint on its own would leave the line.
     with session(urdf, max_acceleration=[0.5]) as (_, probe):
-        position = probe.wait_at_rest(20.0)
-        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        _, here = tool_at_rest(probe, chain, JOINTS, TOOL)
         goal = here.copy()
         goal[:3, 3] += [0.0, 0.25, 0.0]
         sent_ns = stamp_ns(probe.latest().header.stamp)
@@ -260,8 +258,7 @@ def test_a_blended_corner_is_passed_without_stopping_and_an_unblended_one_stops(
     chain = NumpyChain(urdf)
     for radius, stops in ((0.03, False), (0.0, True)):
         with session(urdf, blend_radius=radius) as (_, probe):
-            position = probe.wait_at_rest(20.0)
-            here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+            _, here = tool_at_rest(probe, chain, JOINTS, TOOL)
             corner, goal = here.copy(), here.copy()
             corner[:3, 3] += [0.1, 0.0, 0.0]
             goal[:3, 3] += [0.1, 0.1, 0.0]
@@ -290,8 +287,7 @@ def test_a_blended_corner_is_passed_without_stopping_and_an_unblended_one_stops(
 def test_an_arc_passes_through_its_interim_point(urdf):
     chain = NumpyChain(urdf)
     with session(urdf) as (_, probe):
-        position = probe.wait_at_rest(20.0)
-        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        _, here = tool_at_rest(probe, chain, JOINTS, TOOL)
         interim, goal = here.copy(), here.copy()
         interim[:3, 3] += [0.08, 0.08, 0.0]
         goal[:3, 3] += [0.16, 0.0, 0.0]
@@ -311,8 +307,7 @@ def test_an_arc_passes_through_its_interim_point(urdf):
 def test_paths_that_cannot_be_followed_are_refused_before_any_motion(urdf):
     chain = NumpyChain(urdf)
     with session(urdf) as (_, probe):
-        position = probe.wait_at_rest(20.0)
-        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        position, here = tool_at_rest(probe, chain, JOINTS, TOOL)
         far = here.copy()
         far[:3, 3] = [1.5, 0.0, 0.5]
         status = probe.send([far])
@@ -344,7 +339,14 @@ ROBOT = FilePath(__file__).resolve().parents[1] / 'support' / 'standin_robot.py'
 
 
 def test_a_lost_measured_state_brakes_along_the_line(urdf):
-    """The arm's state stops mid-line (its driver stalls): the brake keeps the tool on it."""
+    """
+    The arm's state stops mid-line (its driver stalls): the brake keeps the tool on it.
+
+    The tool cruises at 0.1 m/s for most of the 0.2 m (about 2.2 s), so the brake, which
+    starts 0.3 s after the last state, ends well before the goal whenever the loss is seen:
+    a plan bounded by the joints' acceleration throughout would already decelerate at
+    that bound from mid-way, and a brake begun after that point would end at the goal.
+    """
     robot = subprocess.Popen(
         [sys.executable, str(ROBOT), '--joints', ','.join(JOINTS),
          '--start', ','.join(map(str, READY))], env=node_env(),
@@ -353,15 +355,16 @@ def test_a_lost_measured_state_brakes_along_the_line(urdf):
     try:
         with session(urdf, joint_topic='/robot/joint_states',
                      command_out_topic='/robot/commands', joint_topic_timeout=0.3,
-                     max_acceleration=[0.5]) as (node, probe):
+                     max_acceleration=[0.5], max_linear_velocity=0.1) as (node, probe):
             pause = probe.create_publisher(Float64MultiArray, '/robot/pause', 10)
-            position = probe.wait_at_rest(20.0)
-            here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+            _, here = tool_at_rest(probe, chain, JOINTS, TOOL)
             goal = here.copy()
             goal[:3, 3] += [0.0, -0.2, 0.0]
             sent_ns = stamp_ns(probe.latest().header.stamp)
-            assert probe.send([goal]).level == DiagnosticStatus.OK
-            probe.spin_until(lambda: np.linalg.norm(probe.latest().velocity) > 0.2, 10.0,
+            status = probe.send([goal])
+            assert status.level == DiagnosticStatus.OK, status.message
+            assert 'max_linear_velocity' in status.message  # it cruises
+            probe.spin_until(lambda: np.linalg.norm(probe.latest().velocity) > 0.05, 10.0,
                              'the motion')
             probe.spin_until(lambda: pause.get_subscription_count() > 0, 10.0, 'the robot')
             pause.publish(Float64MultiArray(data=[2.0]))
@@ -372,7 +375,7 @@ def test_a_lost_measured_state_brakes_along_the_line(urdf):
             distance, angle = line_errors(poses, here, goal)
             assert distance.max() < 1e-4 and angle.max() < 1e-3, (distance.max(), angle.max())
             travelled = np.linalg.norm(poses[-1, :3, 3] - here[:3, 3])
-            assert 0.001 < travelled < 0.19  # braked on the way, on the line
+            assert 0.001 < travelled < 0.17  # braked on the way, on the line
     finally:
         end_process(robot)
 
@@ -387,12 +390,31 @@ def zigzag(here, count):
     return poses
 
 
+def is_path_answer(text: str) -> bool:
+    """Tell whether a ``~/status`` text answers a ``~/cartesian_path`` (refused or run)."""
+    return text.startswith('cartesian_path') or 'profile=line' in text
+
+
+def stop_while_planning(probe, chain) -> list[str]:
+    """From rest, send a path long to plan, call ``~/stop`` 0.3 s on; the answers, in order."""
+    _, here = tool_at_rest(probe, chain, JOINTS, TOOL, 30.0)
+    count = len(probe.statuses)
+    probe.line_pub.publish(path_message(zigzag(here, 1000)))
+    # No event says that the node has begun to plan: 30 stream ticks (0.3 s) of it.
+    ticks = len(probe.states)
+    probe.spin_until(lambda: len(probe.states) >= ticks + 30, 10.0, '30 ticks')
+    stopped = probe.stop()
+    assert stopped.success, stopped.message
+    probe.spin_until(lambda: any(is_path_answer(s.message) for s in probe.statuses[count:]),
+                     60.0, "the path's answer")
+    return [s.message for s in probe.statuses[count:]]
+
+
 def test_a_path_long_to_plan_is_accepted_from_rest_and_stop_does_not_wait_for_it(urdf):
     """1000 corners take a second or more to plan: accepted; ~/stop meanwhile drops it."""
     chain = NumpyChain(urdf)
     with session(urdf) as (_, probe):
-        position = probe.wait_at_rest(20.0)
-        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
+        _, here = tool_at_rest(probe, chain, JOINTS, TOOL)
         status = probe.send(zigzag(here, 1000))
         assert status.level == DiagnosticStatus.OK, status.message
         values = {kv.key: kv.value for kv in status.values}
@@ -401,20 +423,17 @@ def test_a_path_long_to_plan_is_accepted_from_rest_and_stop_does_not_wait_for_it
         plans = len(probe.trajectories)
         assert probe.stop().success
         probe.spin_until(lambda: len(probe.trajectories) > plans, 20.0, "the stop's plan")
-        position = probe.wait_at_rest(30.0)
-        here = chain.pose(TOOL, dict(zip(JOINTS, position, strict=True)))
-        count = len(probe.statuses)
-        probe.line_pub.publish(path_message(zigzag(here, 1000)))
-        # No event says that the node has begun to plan: 30 stream ticks (0.3 s) of it.
-        ticks = len(probe.states)
-        probe.spin_until(lambda: len(probe.states) >= ticks + 30, 10.0, '30 ticks')
-        stopped = probe.stop()
-        assert stopped.success, stopped.message
-        probe.spin_until(lambda: any(s.message.startswith('cartesian_path') for s in
-                                     probe.statuses[count:]), 60.0, "the path's answer")
-        answers = [s.message for s in probe.statuses[count:]]
-        path = next(index for index, text in enumerate(answers)
-                    if text.startswith('cartesian_path'))
-        assert 'came while it was planned' in answers[path], answers
-        stop = next(index for index, text in enumerate(answers) if 'accepted' in text)
-        assert stop < path  # ~/stop answered before the path it dropped
+        for _ in range(3):
+            answers = stop_while_planning(probe, chain)
+            path = next(index for index, text in enumerate(answers) if is_path_answer(text))
+            stop = next(index for index, text in enumerate(answers) if 'accepted' in text)
+            if answers[path].startswith('cartesian_path'):  # refused: the stop came first
+                assert 'came while it was planned' in answers[path], answers
+                assert stop < path  # ~/stop answered before the path it dropped
+                break
+            # The stop overtook the path on the way (a large message): the node read the
+            # path after it and ran it. Not what is tested: stop it and try again.
+            assert stop < path, answers
+            assert probe.stop().success
+        else:
+            raise AssertionError('the stop overtook the path 3 times')

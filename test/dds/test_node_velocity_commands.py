@@ -72,6 +72,9 @@ def session(*ros_args, robot=()):
     probe = VelocityProbe()
     try:
         probe.wait_ready()
+        # The node streams once it has the robot's state; this probe's own best-effort
+        # subscription to it may match later (seen under load: none by the goal's end).
+        probe.spin_until(lambda: probe.measured, 20.0, "the robot's measured state")
         yield probe, node
     finally:
         probe.destroy_node()

@@ -2,9 +2,9 @@
 
 import math
 
-from kinematics_robots import robot_urdf, ROBOTS
 import numpy as np
 import pytest
+from real_arms import arm_fixture, moved
 from scipy.spatial.transform import Rotation
 from synthetic_paths import arc, blended_corner, corner, line, linear_joint, seven_joints
 from traj_gen_ros.core.cartesian import jerk_limited_timing
@@ -15,7 +15,6 @@ from traj_gen_ros.core.cartesian.joint_path import follow
 from traj_gen_ros.core.cartesian.path_timing import time_path, ToolLimits
 from traj_gen_ros.core.cartesian.tool_path import circular_path, straight_path
 from traj_gen_ros.core.kinematic_limits import limit_ratios, limit_violation
-from traj_gen_ros.core.kinematics import Chain
 from traj_gen_ros.core.timing import min_time
 
 NO_TOOL = ToolLimits()
@@ -175,25 +174,7 @@ def test_refuses_bad_limits_and_paths_that_disagree():
         time_path_jerk_limited(path, joint_path, 1.0, 3.0, 20.0, (0.25, 1.2, 1.5))
 
 
-ARMS = {
-    'erd-panda': [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785],
-    'erd-ur10': [0.3, -1.2, 1.6, -1.9, -1.57, 0.4],
-}
-
-
-@pytest.fixture(scope='module', params=sorted(ARMS))
-def arm(request):
-    robot = ROBOTS[request.param]
-    chain = Chain.from_urdf(robot_urdf(request.config, robot.source, robot.name),
-                            robot.joints, tool_frame=robot.default_tool)
-    return chain, np.array(ARMS[request.param])
-
-
-def _moved(pose, offset, rotvec=(0.0, 0.0, 0.0)):
-    moved = pose.copy()
-    moved[:3, 3] += offset
-    moved[:3, :3] = Rotation.from_rotvec(rotvec).as_matrix() @ pose[:3, :3]
-    return moved
+arm = arm_fixture(['erd-panda', 'erd-ur10'])
 
 
 @pytest.mark.parametrize('kind', ['line with a turn', 'two lines', 'arc'])
@@ -201,13 +182,13 @@ def test_real_arms_keep_the_tool_on_the_path_and_every_joint_within_its_jerk(arm
     chain, q0 = arm
     start = chain.forward(q0)
     if kind == 'arc':
-        path = circular_path(start, _moved(start, [0.06, 0.06, 0.0]),
-                             _moved(start, [0.12, 0.0, 0.0]))
+        path = circular_path(start, moved(start, [0.06, 0.06, 0.0]),
+                             moved(start, [0.12, 0.0, 0.0]))
     elif kind == 'two lines':
-        path = straight_path(start, [_moved(start, [0.1, 0.0, 0.0]),
-                                     _moved(start, [0.1, 0.1, 0.0])])
+        path = straight_path(start, [moved(start, [0.1, 0.0, 0.0]),
+                                     moved(start, [0.1, 0.1, 0.0])])
     else:
-        path = straight_path(start, [_moved(start, [0.08, 0.1, -0.06], [0.0, 0.0, 0.3])])
+        path = straight_path(start, [moved(start, [0.08, 0.1, -0.06], [0.0, 0.0, 0.3])])
     joint_path = follow(chain, path, q0)
     v, a, j = 1.5, 3.0, 20.0
     timed = time_path_jerk_limited(path, joint_path, v, a, j, TOOL_DEFAULTS,

@@ -8,38 +8,17 @@ trajectory); the duration within 1 % of the independent phase-plane optimum on 1
 points of the same joint path (test/support/topp_reference.py).
 """
 
-from kinematics_robots import robot_urdf, ROBOTS
 import numpy as np
-import pytest
+from real_arms import arm_fixture, moved, STARTS
 from scipy.spatial.transform import Rotation
 from topp_reference import reference_duration
 from traj_gen_ros.core.cartesian.joint_path import follow
 from traj_gen_ros.core.cartesian.path_timing import time_path, ToolLimits
 from traj_gen_ros.core.cartesian.tool_path import circular_path, straight_path
 from traj_gen_ros.core.kinematic_limits import limit_violation
-from traj_gen_ros.core.kinematics import Chain
 
 TOOL = ToolLimits(0.25, 1.2, np.pi / 2)
-ARMS = {
-    'erd-panda': [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785],
-    'erd-ur10': [0.3, -1.2, 1.6, -1.9, -1.57, 0.4],
-    'pybullet-iiwa': [0.0, 0.6, 0.0, -1.3, 0.0, 0.9, 0.0],
-}
-
-
-@pytest.fixture(scope='module', params=sorted(ARMS))
-def arm(request):
-    robot = ROBOTS[request.param]
-    chain = Chain.from_urdf(robot_urdf(request.config, robot.source, robot.name),
-                            robot.joints, tool_frame=robot.default_tool)
-    return chain, np.array(ARMS[request.param])
-
-
-def _moved(pose, offset, rotvec=(0.0, 0.0, 0.0)):
-    moved = pose.copy()
-    moved[:3, 3] += offset
-    moved[:3, :3] = Rotation.from_rotvec(rotvec).as_matrix() @ pose[:3, :3]
-    return moved
+arm = arm_fixture(STARTS)
 
 
 def _check(chain, q0, path, vmax=1.5, amax=3.0):
@@ -65,7 +44,7 @@ def _check(chain, q0, path, vmax=1.5, amax=3.0):
 def test_a_line_with_a_turn(arm):
     chain, q0 = arm
     start = chain.forward(q0)
-    path = straight_path(start, [_moved(start, [0.08, 0.1, -0.06], [0.0, 0.0, 0.3])])
+    path = straight_path(start, [moved(start, [0.08, 0.1, -0.06], [0.0, 0.0, 0.3])])
     timed = _check(chain, q0, path)
     travel = np.linalg.norm(path.poses(path.length)[0, :3, 3] - start[:3, 3])
     assert timed.duration > travel / TOOL.max_linear_velocity
@@ -74,7 +53,7 @@ def test_a_line_with_a_turn(arm):
 def test_two_lines_blended(arm):
     chain, q0 = arm
     start = chain.forward(q0)
-    corner, goal = _moved(start, [0.1, 0.0, 0.0]), _moved(start, [0.1, 0.1, 0.0])
+    corner, goal = moved(start, [0.1, 0.0, 0.0]), moved(start, [0.1, 0.1, 0.0])
     blended = _check(chain, q0, straight_path(start, [corner, goal], 0.03))
     stopped = _check(chain, q0, straight_path(start, [corner, goal], 0.0))
     assert blended.duration < stopped.duration  # the blend saves the stop at the corner
@@ -83,5 +62,5 @@ def test_two_lines_blended(arm):
 def test_an_arc(arm):
     chain, q0 = arm
     start = chain.forward(q0)
-    _check(chain, q0, circular_path(start, _moved(start, [0.06, 0.06, 0.0]),
-                                    _moved(start, [0.12, 0.0, 0.0])))
+    _check(chain, q0, circular_path(start, moved(start, [0.06, 0.06, 0.0]),
+                                    moved(start, [0.12, 0.0, 0.0])))
