@@ -130,8 +130,12 @@ def test_a_pose_goal_and_a_line_are_planned_with_the_measured_joint(urdf):
         # A pose in the base frame: where these joints put the tool with panda_joint7 at 0.5.
         goal = np.array(START) + [0.2, 0.15, -0.1, 0.2, 0.1, -0.15]
         target = pose(chain, goal)
+        plans = len(probe.trajectories)
         status = probe.pose_goal(target)
         assert status.level == DiagnosticStatus.OK, status.message
+        # The answer may come before the plan's ~/trajectory, by which wait_at_rest knows
+        # the motion's end: until then the stream's rest before the motion looks like it.
+        probe.spin_until(lambda: len(probe.trajectories) > plans, 20.0, 'the ~/trajectory')
         reached = pose(chain, probe.wait_at_rest(20.0))
         distance, angle = errors(reached, target)
         assert distance < 1e-4 and angle < 1e-3, (distance, angle)
@@ -140,8 +144,10 @@ def test_a_pose_goal_and_a_line_are_planned_with_the_measured_joint(urdf):
         step = np.eye(4)
         step[0, 3] = 0.05
         sent_ns = stamp_ns(probe.latest().header.stamp)
+        plans = len(probe.trajectories)
         status = probe.line(step, TOOL)
         assert status.level == DiagnosticStatus.OK, status.message
+        probe.spin_until(lambda: len(probe.trajectories) > plans, 20.0, 'the ~/trajectory')
         probe.wait_at_rest(30.0)
         states = [s for s in probe.states if stamp_ns(s.header.stamp) >= sent_ns]
         poses = np.array([pose(chain, s.position) for s in states])
