@@ -136,7 +136,9 @@ def test_line_publishes_the_path_and_waits_until_at_rest_where_the_plan_ends(sta
 def test_wait_takes_no_older_plan_for_the_requests(stand_in):
     """A plan latched on ~/trajectory before the request is not its plan: no end to wait for."""
     stand_in.publish_plan(time.time_ns() - 10**9, [0.25, -0.5, 1.125])
-    process = start('line', '0.4,0.1,0.3', '--wait', '--timeout', '3')
+    # The timeout covers the CLI's discovery of the node too: 3 s was once too short for it
+    # on an idle machine (the CLI gave up before the stand-in matched it).
+    process = start('line', '0.4,0.1,0.3', '--wait', '--timeout', '8')
     stand_in.spin_until(lambda: stand_in.paths, process, 'a Path')
     stand_in.answer(DiagnosticStatus.OK, 'accepted: profile=line, duration=0.100 s, joints=3',
                     request='cartesian_path', frame_id='', duration='0.1', start_delay='0.0')
@@ -147,7 +149,7 @@ def test_wait_takes_no_older_plan_for_the_requests(stand_in):
     result = stand_in.finish(process)
     assert result.stdout == 'OK: accepted: profile=line, duration=0.100 s, joints=3\n'
     assert assert_one_line_error(result, code=3) == (
-        'traj-gen line: no answer after 3 s: no /trajectory_generator/trajectory for the '
+        'traj-gen line: no answer after 8 s: no /trajectory_generator/trajectory for the '
         'request')
 
 
